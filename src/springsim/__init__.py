@@ -1,0 +1,17 @@
+"""springsim: mass-spring physics (jelly cubes, cloth, balls) on terrains, with a choice of
+integrators. SI units throughout: metres, kilograms, seconds.
+
+    import springsim
+    sim = springsim.Simulation(springsim.load_scene("jelly-plane"), integrator="rk4", dt=1e-3)
+    sim.advance(2.0)
+    sim.positions, sim.velocities, sim.time, sim.energy()
+"""
+from .errors import SceneError, SimulationDiverged
+from .integrators import integrator_names
+from .presets import preset_names
+from .scene import Scene
+from .scenefile import load_scene
+from .simulation import Simulation
+
+__all__ = ["Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
+           "integrator_names", "preset_names"]

@@ -1,0 +1,24 @@
+"""Body builders: each turns a plain description into particles, springs and a surface."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..springs import SpringParameters
+
+
+@dataclass
+class BuiltBody:
+    """Particles and springs of one body, with indices local to the body."""
+
+    positions: np.ndarray            # (n, 3) m
+    velocities: np.ndarray           # (n, 3) m/s
+    masses: np.ndarray               # (n,) kg
+    pinned: np.ndarray               # (n,) bool: pinned particles never move
+    springs: np.ndarray              # (s, 2) int32
+    spring_kind: np.ndarray          # (s,) int8, a SpringKind
+    spring_parameters: dict          # SpringKind -> SpringParameters
+    surface: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.int32))  # triangles
+    radii: np.ndarray | None = None  # (n,) m, contact radius; zero for points
+
+
+__all__ = ["BuiltBody", "SpringParameters"]

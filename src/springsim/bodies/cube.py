@@ -1,0 +1,131 @@
+"""The soft "jelly" cube: an N x N x N lattice of particles joined by springs.
+
+Defaults are the course framework's (see the reference): 10 particles per edge, edge 4 m, 1 kg
+particles, ks = 2000 N/m and kd = 60 N s/m for every kind, and particle (i, j, k) placed at
+``position + ((i, j, k) - N//2) * spacing``, which for N = 10 is the framework's off-centre start.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..errors import require
+from ..springs import SpringKind, SpringParameters, lattice_springs
+from . import BuiltBody
+
+STRUCTURAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
+BEND_OFFSETS = ((2, 0, 0), (0, 2, 0), (0, 0, 2))
+SHEAR_OFFSETS = ((1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1), (0, 1, 1), (0, 1, -1),
+                 (1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1))
+
+
+def _default_springs():
+    return SpringParameters(ks=2000.0, kd=60.0)
+
+
+@dataclass
+class Cube:
+    """A soft cube. Lengths in m, masses in kg, angles in degrees."""
+
+    particles_per_edge: int = 10
+    edge_length: float = 4.0
+    particle_mass: float = 1.0
+    position: tuple = (0.0, 9.0, 0.0)
+    velocity: tuple = (0.0, 0.0, 0.0)
+    rotation_degrees: float = 0.0
+    rotation_axis: tuple = (1.0, 0.0, 1.0)
+    structural: SpringParameters = field(default_factory=_default_springs)
+    shear: SpringParameters = field(default_factory=_default_springs)
+    bend: SpringParameters = field(default_factory=_default_springs)
+    face_springs: bool = False
+    face: SpringParameters = field(default_factory=_default_springs)
+    pinned: tuple = ()
+
+    def validate(self, key: str) -> None:
+        n = self.particles_per_edge
+        require(isinstance(n, int) and n >= 2, f"{key}.particles_per_edge", n,
+                "needs an integer >= 2 (structural and shear springs join neighbours)")
+        require(n >= 3 or not _builds(self.bend), f"{key}.particles_per_edge", n,
+                "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
+        require(self.edge_length > 0, f"{key}.edge_length", self.edge_length, "must be > 0 m")
+        require(self.particle_mass > 0, f"{key}.particle_mass", self.particle_mass,
+                "must be > 0 kg")
+        require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
+                self.rotation_axis, "must be a non-zero vector")
+        for kind in ("structural", "shear", "bend", "face"):
+            params = getattr(self, kind)
+            require(params.ks >= 0, f"{key}.{kind}.ks", params.ks, "must be >= 0 N/m")
+            require(params.kd >= 0, f"{key}.{kind}.kd", params.kd, "must be >= 0 N s/m")
+        count = n ** 3
+        for index in self.pinned:
+            require(0 <= index < count, f"{key}.pinned", index,
+                    f"particle numbers must lie in [0, {count - 1}]")
+
+    def build(self) -> BuiltBody:
+        n = self.particles_per_edge
+        index = np.arange(n ** 3, dtype=np.int32).reshape(n, n, n)
+        spacing = self.edge_length / (n - 1)
+        lattice = np.indices((n, n, n)).reshape(3, -1).T - n // 2
+        offsets = lattice * spacing
+        if self.rotation_degrees:
+            axis = np.asarray(self.rotation_axis, float)
+            rotvec = np.radians(self.rotation_degrees) * axis / np.linalg.norm(axis)
+            offsets = Rotation.from_rotvec(rotvec).apply(offsets)
+        positions = offsets + np.asarray(self.position, float)
+
+        groups = [(SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, self.structural),
+                  (SpringKind.SHEAR, SHEAR_OFFSETS, self.shear),
+                  (SpringKind.BEND, BEND_OFFSETS, self.bend)]
+        springs, kinds = [], []
+        for kind, kind_offsets, params in groups:
+            if not _builds(params):
+                continue
+            for offset in kind_offsets:
+                pairs = lattice_springs(index, offset)
+                springs.append(pairs)
+                kinds.append(np.full(len(pairs), kind, np.int8))
+        if self.face_springs and _builds(self.face):
+            pairs = face_to_face_springs(index)
+            springs.append(pairs)
+            kinds.append(np.full(len(pairs), SpringKind.FACE, np.int8))
+
+        pinned = np.zeros(n ** 3, bool)
+        pinned[list(self.pinned)] = True
+        return BuiltBody(
+            positions=positions,
+            velocities=np.tile(np.asarray(self.velocity, float), (n ** 3, 1)),
+            masses=np.full(n ** 3, float(self.particle_mass)),
+            pinned=pinned,
+            springs=np.concatenate(springs) if springs else np.empty((0, 2), np.int32),
+            spring_kind=np.concatenate(kinds) if kinds else np.empty(0, np.int8),
+            spring_parameters={SpringKind.STRUCTURAL: self.structural,
+                               SpringKind.SHEAR: self.shear, SpringKind.BEND: self.bend,
+                               SpringKind.FACE: self.face},
+            surface=cube_surface(index),
+        )
+
+
+def _builds(params: SpringParameters) -> bool:
+    return params.ks > 0 or params.kd > 0
+
+
+def face_to_face_springs(index: np.ndarray) -> np.ndarray:
+    """Long springs from each face particle to the one on the opposite face (0 to N-1)."""
+    n = index.shape[0]
+    return np.concatenate([lattice_springs(index, tuple(n - 1 if a == axis else 0
+                                                        for a in range(3)))
+                           for axis in range(3)])
+
+
+def cube_surface(index: np.ndarray) -> np.ndarray:
+    """Triangles of the six outer faces, wound so that normals point out of the cube."""
+    faces = [index[0, :, :], index[-1, :, :].T, index[:, 0, :].T, index[:, -1, :],
+             index[:, :, 0], index[:, :, -1].T]
+    return np.concatenate([grid_triangles(face) for face in faces])
+
+
+def grid_triangles(grid: np.ndarray) -> np.ndarray:
+    """Two triangles per cell of a 2-D grid of particle numbers."""
+    a, b = grid[:-1, :-1].ravel(), grid[1:, :-1].ravel()
+    c, d = grid[1:, 1:].ravel(), grid[:-1, 1:].ravel()
+    return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int32)

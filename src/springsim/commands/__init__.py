@@ -1,0 +1,1 @@
+"""Subcommands of the `springsim` command line, one module each (see springsim.cli)."""

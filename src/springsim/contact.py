@@ -1,0 +1,103 @@
+"""Contact between particles and terrains.
+
+How contact enters an integrator, and why:
+
+1. Inside every force evaluation (every stage of a multi-stage method, on that stage's temporary
+   state) a particle within the contact band (phi < epsilon) feels the terrain's reaction: the part
+   of its acceleration that pushes into the surface is cancelled, and Coulomb friction acts against
+   its sliding velocity with at most ``friction`` times that normal reaction. Friction is written as
+   the tangential acceleration that would stop the sliding within the current step ``h``, clamped
+   to the Coulomb cone: inside the cone the particle sticks (static friction, no creeping); outside
+   it slides with kinetic friction along -v_T. The formula never divides by |v_T|, so a particle at
+   rest is no special case. Because the reaction is a force, every stage sees it and the method
+   keeps its order away from impacts.
+2. After the whole step, an impact pass: a particle within the band that still approaches the
+   surface has its normal velocity reflected with restitution (v' = -e v_N + v_T), and a particle
+   that ended the step inside the surface is moved back onto it. A step of any size therefore ends
+   with no penetration, whatever the integrator did in between; doing this once per step (not per
+   stage) keeps stages smooth functions of the state, which is what their order relies on.
+"""
+import math
+
+from ._jit import kernel
+from .terrains import BOWL, PLANE
+
+
+@kernel
+def terrain_distance(kind, p, n, terrain_radius, x0, x1, x2, particle_radius):
+    """Signed distance (m) from a particle's surface to a terrain, and the terrain's unit normal.
+
+    ``p`` is the plane's point or the sphere's centre, ``n`` the plane's normal. Scalars only:
+    this runs for every particle and terrain, and array arguments would cost reference counting.
+    """
+    if kind == PLANE:
+        nx, ny, nz = n[0], n[1], n[2]
+        phi = (x0 - p[0]) * nx + (x1 - p[1]) * ny + (x2 - p[2]) * nz - particle_radius
+        return phi, nx, ny, nz
+    dx, dy, dz = x0 - p[0], x1 - p[1], x2 - p[2]
+    r = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if r == 0.0:
+        nx, ny, nz = 0.0, 1.0, 0.0  # at the very centre any direction will do
+    else:
+        nx, ny, nz = dx / r, dy / r, dz / r
+    if kind == BOWL:
+        return terrain_radius - r - particle_radius, -nx, -ny, -nz
+    return r - terrain_radius - particle_radius, nx, ny, nz
+
+
+@kernel
+def apply_contact_forces(model, x, v, h, a):
+    """Cancel accelerations into touched terrains and add Coulomb friction (see module doc)."""
+    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
+    radii, epsilon, friction = model.terrain_radius, model.terrain_epsilon, model.terrain_friction
+    for i in range(x.shape[0]):
+        if model.inv_mass[i] == 0.0:
+            continue
+        for t in range(kinds.shape[0]):
+            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
+                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+            if phi >= epsilon[t]:
+                continue
+            a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
+            if a_n >= 0.0:
+                continue  # pulled away from the surface: no reaction, no friction
+            reaction = -a_n
+            # remove the push into the surface
+            ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
+            # tangential (sliding) velocity
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
+            # the friction that would stop the sliding within this step, clamped to the cone
+            sx, sy, sz = -(ax + tx / h), -(ay + ty / h), -(az + tz / h)
+            size = math.sqrt(sx * sx + sy * sy + sz * sz)
+            limit = friction[t] * reaction
+            scale = 1.0 if size <= limit else limit / size
+            a[i, 0] = ax + scale * sx
+            a[i, 1] = ay + scale * sy
+            a[i, 2] = az + scale * sz
+
+
+@kernel
+def resolve_terrain_impacts(model, x, v):
+    """After a step: reflect approaching velocities with restitution, lift particles out."""
+    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
+    radii, epsilon, restitution = (model.terrain_radius, model.terrain_epsilon,
+                                   model.terrain_restitution)
+    for i in range(x.shape[0]):
+        if model.inv_mass[i] == 0.0:
+            continue
+        for t in range(kinds.shape[0]):
+            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
+                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+            if phi >= epsilon[t]:
+                continue
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            if v_n < 0.0:
+                bounce = (1.0 + restitution[t]) * v_n
+                v[i, 0] -= bounce * nx
+                v[i, 1] -= bounce * ny
+                v[i, 2] -= bounce * nz
+            if phi < 0.0:
+                x[i, 0] -= phi * nx
+                x[i, 1] -= phi * ny
+                x[i, 2] -= phi * nz

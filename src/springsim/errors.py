@@ -1,0 +1,33 @@
+"""Errors a user can act on."""
+
+
+class SceneError(ValueError):
+    """A scene (preset, file or override) asks for something springsim cannot simulate.
+
+    The message names the key, the value given and what is allowed.
+    """
+
+    def __init__(self, key: str, value, allowed: str):
+        self.key, self.value, self.allowed = key, value, allowed
+        super().__init__(f"{key} = {value!r}: {allowed}")
+
+
+class SimulationDiverged(RuntimeError):
+    """The state blew up (NaN, infinity or a speed above the course framework's limit)."""
+
+    def __init__(self, *, time: float, step: int, integrator: str, dt: float, particle: int,
+                 position, speed_squared: float):
+        self.time, self.step, self.integrator, self.dt = time, step, integrator, dt
+        self.particle, self.position, self.speed_squared = particle, position, speed_squared
+        where = "(" + ", ".join(f"{c:.3g}" for c in position) + ")"
+        super().__init__(
+            f"simulation diverged at t = {time:.6g} s (step {step}) with integrator "
+            f"'{integrator}' and dt = {dt:g} s: particle {particle} near {where} has |v|^2 = "
+            f"{speed_squared:.3g} (limit 1e6). Try a smaller dt (for example {dt / 2:g}), a more "
+            f"stable integrator (rk4, or implicit_euler for large steps), or softer springs.")
+
+
+def require(condition: bool, key: str, value, allowed: str) -> None:
+    """Raise a SceneError for ``key`` unless ``condition`` holds."""
+    if not condition:
+        raise SceneError(key, value, allowed)

@@ -1,0 +1,40 @@
+"""Explicit midpoint (RK2): take the derivative at a temporary half-step state. Second order.
+
+    x_mid = x + h/2 v,      v_mid = v + h/2 a(x, v)
+    x'    = x + h v_mid,    v'    = v + h a(x_mid, v_mid)
+"""
+import numpy as np
+
+from .._jit import kernel
+from ..forces import accelerations
+from . import KernelIntegrator, register
+from ._steps import add_scaled, finish_step
+
+
+@kernel
+def midpoint_step(model, x, v, h, a, x_mid, v_mid):
+    accelerations(model, x, v, h, a)
+    add_scaled(x_mid, x, h / 2, v)
+    add_scaled(v_mid, v, h / 2, a)
+    accelerations(model, x_mid, v_mid, h, a)
+    add_scaled(x, x, h, v_mid)
+    add_scaled(v, v, h, a)
+
+
+@kernel
+def advance(model, x, v, h, steps):
+    a, x_mid, v_mid = np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    for step in range(steps):
+        midpoint_step(model, x, v, h, a, x_mid, v_mid)
+        particle = finish_step(model, x, v)
+        if particle >= 0:
+            return step + 1, particle
+    return steps, -1
+
+
+@register
+class Midpoint(KernelIntegrator):
+    name = "midpoint"
+    order = 2
+    summary = "explicit midpoint (RK2): derivative at a half-step state"
+    kernel = staticmethod(advance)

@@ -1,0 +1,58 @@
+"""Classical fourth-order Runge-Kutta on the whole state (x, v). Fourth order.
+
+    k1 = f(y),  k2 = f(y + h/2 k1),  k3 = f(y + h/2 k2),  k4 = f(y + h k3)
+    y' = y + h/6 (k1 + 2 k2 + 2 k3 + k4),   with y = (x, v) and f(x, v) = (v, a(x, v)).
+
+Each stage evaluates forces on its own temporary state (x_k, v_k); the weighted sum of the
+stages accumulates in (dx, dv).
+"""
+import numpy as np
+
+from .._jit import kernel
+from ..forces import accelerations
+from . import KernelIntegrator, register
+from ._steps import add_scaled, finish_step
+
+
+@kernel
+def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv):
+    accelerations(model, x, v, h, a)          # k1 = (v, a)
+    dx[:] = v
+    dv[:] = a
+    add_scaled(x_k, x, h / 2, v)
+    add_scaled(v_k, v, h / 2, a)
+    accelerations(model, x_k, v_k, h, a)      # k2 = (v_k, a)
+    add_scaled(dx, dx, 2.0, v_k)
+    add_scaled(dv, dv, 2.0, a)
+    add_scaled(x_k, x, h / 2, v_k)
+    add_scaled(v_k, v, h / 2, a)
+    accelerations(model, x_k, v_k, h, a)      # k3
+    add_scaled(dx, dx, 2.0, v_k)
+    add_scaled(dv, dv, 2.0, a)
+    add_scaled(x_k, x, h, v_k)
+    add_scaled(v_k, v, h, a)
+    accelerations(model, x_k, v_k, h, a)      # k4
+    add_scaled(dx, dx, 1.0, v_k)
+    add_scaled(dv, dv, 1.0, a)
+    add_scaled(x, x, h / 6, dx)
+    add_scaled(v, v, h / 6, dv)
+
+
+@kernel
+def advance(model, x, v, h, steps):
+    x_k, v_k, a = np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    dx, dv = np.empty_like(x), np.empty_like(x)
+    for step in range(steps):
+        rk4_step(model, x, v, h, x_k, v_k, a, dx, dv)
+        particle = finish_step(model, x, v)
+        if particle >= 0:
+            return step + 1, particle
+    return steps, -1
+
+
+@register
+class RK4(KernelIntegrator):
+    name = "rk4"
+    order = 4
+    summary = "classical fourth-order Runge-Kutta"
+    kernel = staticmethod(advance)

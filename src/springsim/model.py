@@ -1,0 +1,112 @@
+"""The model: everything that stays fixed while simulating, built once from a scene.
+
+Kernels receive ``model.arrays`` (a NamedTuple of arrays and numbers, which Numba compiles against);
+the rest of the model (body slices, spring kinds, surfaces) serves output, rendering and tests.
+"""
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .springs import SpringKind
+from .terrains import pack_terrains
+
+
+class ModelArrays(NamedTuple):
+    inv_mass: np.ndarray         # (P,) 1/kg, zero for pinned particles
+    radius: np.ndarray           # (P,) m, contact radius (zero for points)
+    gravity: np.ndarray          # (3,) m/s^2
+    drag: np.ndarray             # (P,) viscous drag coefficient c (N s/m): f = -c v
+    springs: np.ndarray          # (S, 2) uint32 particle numbers (unsigned: no wrap-around checks)
+    rest_length: np.ndarray      # (S,) m
+    spring_group: np.ndarray     # (S,) int16, row of the group tables below
+    group_ks: np.ndarray         # (G,) N/m
+    group_kd: np.ndarray         # (G,) N s/m
+    terrain_kind: np.ndarray     # (T,) PLANE, SPHERE or BOWL
+    terrain_point: np.ndarray    # (T, 3) plane point or sphere centre
+    terrain_normal: np.ndarray   # (T, 3) plane unit normal
+    terrain_radius: np.ndarray   # (T,)
+    terrain_restitution: np.ndarray
+    terrain_friction: np.ndarray
+    terrain_epsilon: np.ndarray
+
+
+@dataclass(frozen=True)
+class BodySlice:
+    """Where one body's particles lie in the model, and its surface triangles (global numbers)."""
+
+    name: str
+    start: int
+    stop: int
+    surface: np.ndarray
+
+
+@dataclass(frozen=True)
+class Model:
+    arrays: ModelArrays
+    mass: np.ndarray             # (P,) kg
+    pinned: np.ndarray           # (P,) bool
+    spring_kind: np.ndarray      # (S,) int8 SpringKind
+    bodies: tuple                # BodySlice per body
+    initial_positions: np.ndarray
+    initial_velocities: np.ndarray
+    terrains: tuple
+    scene_bodies: tuple          # the body descriptions the model was built from
+
+    @property
+    def particle_count(self) -> int:
+        return len(self.mass)
+
+    @property
+    def springs(self) -> np.ndarray:
+        return self.arrays.springs
+
+    def spring_count(self, kind: SpringKind | None = None) -> int:
+        if kind is None:
+            return len(self.spring_kind)
+        return int(np.count_nonzero(self.spring_kind == kind))
+
+
+def build_model(scene) -> Model:
+    """Assemble every body of ``scene`` into one set of particle and spring arrays."""
+    built = [body.build() for body in scene.bodies]
+    offsets = np.cumsum([0] + [len(b.masses) for b in built])
+    positions = np.concatenate([b.positions for b in built])
+    mass = np.concatenate([b.masses for b in built])
+    pinned = np.concatenate([b.pinned for b in built])
+    radius = np.concatenate([b.radii if b.radii is not None else np.zeros(len(b.masses))
+                             for b in built])
+
+    group_ks, group_kd, springs, groups, kinds = [], [], [], [], []
+    for body, start in zip(built, offsets):
+        for kind, params in body.spring_parameters.items():
+            members = body.spring_kind == kind
+            if not members.any():
+                continue
+            springs.append(body.springs[members] + np.int32(start))
+            groups.append(np.full(members.sum(), len(group_ks), np.int16))
+            kinds.append(body.spring_kind[members])
+            group_ks.append(params.ks)
+            group_kd.append(params.kd)
+    springs = np.concatenate(springs) if springs else np.empty((0, 2), np.int32)
+    groups = np.concatenate(groups) if groups else np.empty(0, np.int16)
+    kinds = np.concatenate(kinds) if kinds else np.empty(0, np.int8)
+    # Sorting by the first particle makes the force loop's writes walk memory in order.
+    order = np.argsort(springs[:, 0], kind="stable")
+    springs, groups, kinds = springs[order], groups[order], kinds[order]
+    rest_length = np.linalg.norm(positions[springs[:, 0]] - positions[springs[:, 1]], axis=1)
+
+    arrays = ModelArrays(
+        inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
+        gravity=np.asarray(scene.gravity, float), drag=np.full(len(mass), float(scene.drag)),
+        springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
+        group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
+        **pack_terrains(scene.terrains))
+    bodies = tuple(BodySlice(getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{i}",
+                             int(offsets[i]), int(offsets[i + 1]), b.surface + offsets[i])
+                   for i, (spec, b) in enumerate(zip(scene.bodies, built)))
+    velocities = np.concatenate([b.velocities for b in built])
+    velocities[pinned] = 0.0
+    return Model(arrays=arrays, mass=mass, pinned=pinned, spring_kind=kinds, bodies=bodies,
+                 initial_positions=positions, initial_velocities=velocities,
+                 terrains=tuple(scene.terrains), scene_bodies=tuple(scene.bodies))

@@ -1,0 +1,62 @@
+"""A scene: the plain description a model is built from (bodies, terrains, gravity, integrator).
+
+Scenes are plain dataclasses so that presets, TOML files and ``--set`` overrides all say the same
+things. ``Scene.validate`` rejects what cannot be simulated before anything is built.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import require
+
+
+@dataclass
+class Scene:
+    name: str = "custom"
+    bodies: list = field(default_factory=list)
+    terrains: list = field(default_factory=list)
+    integrator: str = "rk4"
+    dt: float = 0.001                     # s
+    duration: float = 8.0                 # s, how long `springsim run` simulates
+    gravity: tuple = (0.0, -9.8, 0.0)     # m/s^2
+    drag: float = 0.0                     # viscous drag coefficient, N s/m (f = -drag v)
+
+    def validate(self) -> None:
+        from .integrators import integrator_names
+
+        require(self.integrator in integrator_names(), "integrator", self.integrator,
+                "must be one of " + ", ".join(integrator_names()))
+        require(_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")
+        require(_finite(self.duration) and self.duration >= 0, "duration", self.duration,
+                "must be >= 0 s")
+        require(np.shape(self.gravity) == (3,) and _finite(self.gravity), "gravity",
+                self.gravity, "must be three finite numbers (m/s^2)")
+        require(_finite(self.drag) and self.drag >= 0, "drag", self.drag, "must be >= 0 N s/m")
+        require(len(self.bodies) > 0, "bodies", self.bodies, "a scene needs at least one body")
+        for i, body in enumerate(self.bodies):
+            body.validate(f"bodies.{i}")
+        for t, terrain in enumerate(self.terrains):
+            terrain.validate(f"terrains.{t}")
+
+
+def check_bodies_outside_terrains(model) -> None:
+    """Reject a model whose bodies start inside a terrain (it would be shot out at once)."""
+    for body_index, body in enumerate(model.bodies):
+        x = model.initial_positions[body.start:body.stop]
+        radii = model.arrays.radius[body.start:body.stop]
+        for t, terrain in enumerate(model.terrains):
+            depth = -float(np.min(terrain.signed_distance(x, radii)))
+            require(depth <= 0, f"bodies.{body_index}.position", _position_of(model, body_index),
+                    f"puts the body {depth:.3g} m inside terrains.{t} "
+                    f"({type(terrain).__name__}); move the body or the terrain")
+
+
+def _position_of(model, body_index):
+    return getattr(model.scene_bodies[body_index], "position", None)
+
+
+def _finite(value) -> bool:
+    try:
+        return bool(np.all(np.isfinite(np.asarray(value, float))))
+    except (TypeError, ValueError):
+        return False
