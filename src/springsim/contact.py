@@ -19,6 +19,8 @@ How contact enters an integrator, and why:
 """
 import math
 
+import numpy as np
+
 from ._jit import kernel
 from .terrains import BOWL, PLANE
 
@@ -59,22 +61,24 @@ def apply_contact_forces(model, x, v, h, a):
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
-            if a_n >= 0.0:
-                continue  # pulled away from the surface: no reaction, no friction
-            reaction = -a_n
-            # remove the push into the surface
-            ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
-            # tangential (sliding) velocity
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            # The reaction cancels the push into the surface; a particle already moving away
+            # keeps only the part of the push that stops it within this step (see module doc).
+            reaction = -a_n - max(v_n, 0.0) / h
+            if reaction <= 0.0:
+                continue  # pulled away from the surface, or leaving fast: no reaction, no friction
+            # tangential acceleration and tangential (sliding) velocity
+            ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
             tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
             # the friction that would stop the sliding within this step, clamped to the cone
             sx, sy, sz = -(ax + tx / h), -(ay + ty / h), -(az + tz / h)
             size = math.sqrt(sx * sx + sy * sy + sz * sz)
             limit = friction[t] * reaction
             scale = 1.0 if size <= limit else limit / size
-            a[i, 0] = ax + scale * sx
-            a[i, 1] = ay + scale * sy
-            a[i, 2] = az + scale * sz
+            a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
+            a[i, 0] = ax + scale * sx + a_normal * nx
+            a[i, 1] = ay + scale * sy + a_normal * ny
+            a[i, 2] = az + scale * sz + a_normal * nz
 
 
 @kernel
@@ -83,6 +87,8 @@ def resolve_terrain_impacts(model, x, v):
     kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
     radii, epsilon, restitution = (model.terrain_radius, model.terrain_epsilon,
                                    model.terrain_restitution)
+    g = model.gravity
+    resting_speed = np.sqrt(2.0 * np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) * epsilon)
     for i in range(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
@@ -93,7 +99,8 @@ def resolve_terrain_impacts(model, x, v):
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             if v_n < 0.0:
-                bounce = (1.0 + restitution[t]) * v_n
+                e = restitution[t] if v_n < -resting_speed[t] else 0.0
+                bounce = (1.0 + e) * v_n
                 v[i, 0] -= bounce * nx
                 v[i, 1] -= bounce * ny
                 v[i, 2] -= bounce * nz

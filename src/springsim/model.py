@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .bodies.balls import collision_parameters
 from .springs import SpringKind
 from .terrains import pack_terrains
 
@@ -29,6 +30,13 @@ class ModelArrays(NamedTuple):
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
+    # Body-body collisions (collisions.py). A ball is a particle with radius > 0 from a Balls body.
+    balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
+    ball_slot: np.ndarray = np.empty(0, np.int64)             # (P,) row in the ball tables, or -1
+    ball_restitution: np.ndarray = np.empty(0)                # (B,) ball-ball
+    particle_restitution: np.ndarray = np.empty(0)            # (B,) ball-particle
+    particle_friction: np.ndarray = np.empty(0)               # (B,) ball-particle Coulomb friction
+    position_correction: np.ndarray = np.empty(0)             # (B,) share of a penetration removed
 
 
 @dataclass(frozen=True)
@@ -98,10 +106,10 @@ def build_model(scene) -> Model:
 
     arrays = ModelArrays(
         inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
-        gravity=np.asarray(scene.gravity, float), drag=np.full(len(mass), float(scene.drag)),
+        gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
-        **pack_terrains(scene.terrains))
+        **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius))
     bodies = tuple(BodySlice(getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{i}",
                              int(offsets[i]), int(offsets[i + 1]), b.surface + offsets[i])
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
@@ -110,3 +118,24 @@ def build_model(scene) -> Model:
     return Model(arrays=arrays, mass=mass, pinned=pinned, spring_kind=kinds, bodies=bodies,
                  initial_positions=positions, initial_velocities=velocities,
                  terrains=tuple(scene.terrains), scene_bodies=tuple(scene.bodies))
+
+
+def particle_drag(scene, built) -> np.ndarray:
+    """(P,) drag coefficient (N s/m): the scene's drag plus the body's own (cloth and balls carry
+    the reference's 3.4e-4; a body without a ``drag`` setting adds nothing)."""
+    return np.concatenate([np.full(len(b.masses), scene.drag + getattr(spec, "drag", 0.0), float)
+                           for spec, b in zip(scene.bodies, built)])
+
+
+def collision_arrays(specs, built, radius) -> dict:
+    """The ball tables of ModelArrays: which particles are balls and how each one collides."""
+    is_ball = radius > 0
+    ball_slot = np.full(len(radius), -1, np.int64)
+    ball_slot[is_ball] = np.arange(np.count_nonzero(is_ball))
+    settings = {name: [] for name in collision_parameters(None)}
+    for spec, b in zip(specs, built):
+        count = np.count_nonzero(b.radii > 0) if b.radii is not None else 0
+        for name, value in collision_parameters(spec).items():
+            settings[name].append(np.full(count, value))
+    return {"balls": np.flatnonzero(is_ball).astype(np.int64), "ball_slot": ball_slot,
+            **{name: np.concatenate(values) for name, values in settings.items()}}

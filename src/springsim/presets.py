@@ -1,4 +1,8 @@
 """The built-in scenes, with the course framework's defaults."""
+import numpy as np
+
+from .bodies.balls import Ball, Balls
+from .bodies.cloth import Cloth
 from .bodies.cube import Cube
 from .errors import SceneError
 from .scene import Scene
@@ -7,6 +11,38 @@ from .terrains import Bowl, Plane, Sphere, tilted_plane
 
 def jelly(name: str, terrain) -> Scene:
     return Scene(name=name, bodies=[Cube()], terrains=[terrain])
+
+
+def cloth_balls() -> Scene:
+    """The reference's scene 2 exactly: a 25 x 25 cloth, 4 x 4 m at y = 0 with its corners pinned,
+    and four 125 kg balls of radius 0.5 m dropped from rest at (+-0.75, 1, +-0.75). No terrain."""
+    return Scene(name="cloth-balls", bodies=[Cloth(), Balls()], terrains=[], dt=1e-4)
+
+
+def cloth_hang() -> Scene:
+    """The reference cloth pinned along its +z edge, starting flat 4 m up: it swings down and
+    hangs (the plane at y = -1 stays below its lowest reach)."""
+    return Scene(name="cloth-hang", bodies=[Cloth(position=(0.0, 4.0, 0.0), pinned="edge")],
+                 terrains=[Plane()], dt=1e-4)
+
+
+def jelly_balls() -> Scene:
+    """The default jelly cube on the plane, with three 20 kg balls dropped on its top face."""
+    balls = [Ball(position=(x, 13.0 + h, z), radius=0.5, mass=20.0)
+             for x, z, h in ((-1.0, -1.0, 0.0), (0.8, -0.5, 1.0), (-0.2, 0.9, 2.0))]
+    return Scene(name="jelly-balls", bodies=[Cube(), Balls(balls=balls)], terrains=[Plane()])
+
+
+def ball_rain_on_cloth(particles_per_edge: int = 100, balls_per_edge: int = 10) -> Scene:
+    """A large version of cloth-balls for benchmarks: a 10 x 10 m cloth with its corners pinned
+    and ``balls_per_edge``^2 balls of radius 0.4 m (64 kg) in a grid 1 m above it."""
+    spacing = 10.0 / balls_per_edge
+    centres = (np.arange(balls_per_edge) + 0.5) * spacing - 5.0
+    balls = [Ball(position=(float(x), 1.0, float(z)), radius=0.4, mass=64.0)
+             for x in centres for z in centres]
+    cloth = Cloth(particles_per_edge=particles_per_edge, width=10.0, height=10.0)
+    return Scene(name="cloth-balls-100", bodies=[cloth, Balls(balls=balls)], terrains=[],
+                 dt=1e-4)
 
 
 PRESETS = {
@@ -18,6 +54,11 @@ PRESETS = {
                      "the cube dropped on a sphere of radius 3 centred at (0, -1, 0)"),
     "jelly-bowl": (lambda: jelly("jelly-bowl", Bowl()),
                    "the cube inside a bowl of radius 7 centred at (2, 7, 1)"),
+    "jelly-balls": (jelly_balls, "three balls dropped on the jelly cube on the plane"),
+    "cloth-balls": (cloth_balls, "the reference cloth (25 x 25, corners pinned) catching four "
+                                 "balls; dt 1e-4"),
+    "cloth-hang": (cloth_hang, "the cloth pinned along one edge, swinging down from flat"),
+    "cloth-balls-100": (ball_rain_on_cloth, "benchmark: 100 balls falling on a 100 x 100 cloth"),
 }
 
 

@@ -57,4 +57,4 @@ def get_integrator(name: str, **options) -> Integrator:
 
 
 # The registry: one line per integrator file.
-from . import explicit_euler, symplectic_euler, midpoint, rk4  # noqa: E402,F401
+from . import explicit_euler, symplectic_euler, midpoint, rk4, implicit_euler, predict_reevaluate  # noqa: E402,F401,E501

@@ -2,6 +2,7 @@
 import numpy as np
 
 from .._jit import kernel
+from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
@@ -29,6 +30,8 @@ def first_diverged(x, v):
 
 @kernel
 def finish_step(model, x, v):
-    """Everything after the integrator's update: impacts, then the divergence check."""
+    """Everything after the integrator's update: terrain impacts, body-body collisions (balls),
+    then the divergence check."""
     resolve_terrain_impacts(model, x, v)
+    resolve_body_collisions(model, x, v)
     return first_diverged(x, v)

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The main job: set up a virtual environment (first time only), simulate the default scene
+# (the jelly cube on the plane), print a summary, and write jelly-plane.npz and jelly-plane.mp4.
+# Extra arguments go to `springsim run` (e.g. ./run.sh --integrator midpoint).
+set -euo pipefail
+cd "$(dirname "$0")"
+if [ ! -x .venv/bin/springsim ] || [ pyproject.toml -nt .venv/.installed ]; then
+  python3 -m venv .venv
+  .venv/bin/pip install --quiet --upgrade pip
+  .venv/bin/pip install --quiet -e ".[test]"
+  touch .venv/.installed
+fi
+exec .venv/bin/springsim run jelly-plane --video jelly-plane.mp4 "$@"

@@ -1,0 +1,191 @@
+"""Broad phase: the overlapping (ball, particle) pairs, found without testing every pair.
+
+A contact is a pair (a, b) where a is a ball, b any other particle (a ball or a point) and
+|x_a - x_b| < r_a + r_b. A ball-ball contact is listed once, from the lower-numbered ball. Pairs
+come in one canonical order, by ball and then by partner (both ascending particle numbers),
+whichever method found them, so that both methods give bit-identical simulations.
+
+- ``brute_force_pairs`` tests every ball against every particle: the cheapest for a few balls
+  (cloth-balls tests 4 x 629).
+- ``grid_pairs`` sorts the particles into a uniform grid over their bounding box (a counting sort,
+  rebuilt every step) whose cells are as wide as the largest ball, and tests each ball only against
+  the particles of the cells its reach (its radius plus the largest radius) overlaps: at most
+  3 x 3 x 3 cells. The cost grows with particles plus balls, not with their product.
+"""
+import math
+
+import numpy as np
+
+from ._jit import kernel
+
+# Above this many ball-particle tests a step, the grid is cheaper than testing every pair.
+BRUTE_FORCE_PAIR_LIMIT = 20_000
+# The grid never has more cells than this many per particle (a particle far away would otherwise
+# make the bounding box, and the cell array, huge); cells grow instead.
+MAX_CELLS_PER_PARTICLE = 8
+
+
+@kernel
+def find_contacts(x, radius, balls, ball_slot):
+    """(K, 2) contact pairs (ball, partner) in canonical order, by whichever method is cheaper."""
+    if balls.shape[0] * x.shape[0] <= BRUTE_FORCE_PAIR_LIMIT:
+        return brute_force_pairs(x, radius, balls, ball_slot)
+    return grid_pairs(x, radius, balls, ball_slot)
+
+
+@kernel
+def brute_force_pairs(x, radius, balls, ball_slot):
+    """Every contact, by testing every ball against every particle."""
+    capacity = 4 * balls.shape[0] + 16
+    while True:
+        owner, partner = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
+        count = 0
+        for a in balls:
+            for b in range(x.shape[0]):
+                if is_partner(ball_slot, a, b) and overlaps(x, radius, a, b):
+                    if count < capacity:
+                        owner[count], partner[count] = a, b
+                    count += 1
+        if count <= capacity:
+            return as_pairs(owner, partner, count)
+        capacity = count  # the buffers were too small: now the count is known
+
+
+@kernel
+def grid_pairs(x, radius, balls, ball_slot):
+    """Every contact, by testing each ball against the particles of the grid cells it reaches."""
+    largest_radius = 0.0
+    for i in range(radius.shape[0]):
+        largest_radius = max(largest_radius, radius[i])
+    grid = build_grid(x, 2.0 * largest_radius)
+    capacity = 4 * balls.shape[0] + 16
+    while True:
+        owner, partner = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
+        count = 0
+        for a in balls:
+            first = count
+            count = collect_partners(x, radius, ball_slot, grid, a, radius[a] + largest_radius,
+                                     partner, count)
+            owner[first:min(count, capacity)] = a
+            # cells are visited in space order; sort to the canonical (particle number) order
+            partner[first:min(count, capacity)].sort()
+        if count <= capacity:
+            return as_pairs(owner, partner, count)
+        capacity = count
+
+
+@kernel
+def collect_partners(x, radius, ball_slot, grid, a, reach, partner, count):
+    """Append to ``partner`` (while it has room) the particles in contact with ball a among the
+    grid cells within ``reach`` of it; return the new count, room or not."""
+    origin, cell_size, dims, cell_start, cell_particles = grid
+    x_low, x_high = cell_range(x[a, 0], reach, origin[0], cell_size, dims[0])
+    y_low, y_high = cell_range(x[a, 1], reach, origin[1], cell_size, dims[1])
+    z_low, z_high = cell_range(x[a, 2], reach, origin[2], cell_size, dims[2])
+    for ix in range(x_low, x_high + 1):
+        for iy in range(y_low, y_high + 1):
+            for iz in range(z_low, z_high + 1):
+                cell = (ix * dims[1] + iy) * dims[2] + iz
+                for k in range(cell_start[cell], cell_start[cell + 1]):
+                    b = cell_particles[k]
+                    if is_partner(ball_slot, a, b) and overlaps(x, radius, a, b):
+                        if count < partner.shape[0]:
+                            partner[count] = b
+                        count += 1
+    return count
+
+
+@kernel
+def as_pairs(owner, partner, count):
+    pairs = np.empty((count, 2), np.int64)
+    for k in range(count):
+        pairs[k, 0], pairs[k, 1] = owner[k], partner[k]
+    return pairs
+
+
+@kernel
+def build_grid(x, cell_size):
+    """A uniform grid of the particles: (origin, cell size, dims, cell_start, cell_particles).
+
+    The particles of cell c are ``cell_particles[cell_start[c]:cell_start[c + 1]]``, ascending.
+    Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``. Non-finite positions are
+    left out of the bounding box and land in a border cell, where no distance test passes.
+    """
+    count = x.shape[0]
+    origin, extent = bounding_box(x)
+    if not cell_size > 0.0:
+        cell_size = 1.0
+    dims = np.empty(3, np.int64)
+    while True:
+        cells = 1.0
+        for c in range(3):
+            cells *= math.floor(extent[c] / cell_size) + 1.0
+        if cells <= MAX_CELLS_PER_PARTICLE * count + 64:
+            break
+        cell_size *= 2.0
+    for c in range(3):
+        dims[c] = int(math.floor(extent[c] / cell_size)) + 1
+    cell_of = np.empty(count, np.int64)
+    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
+    for i in range(count):
+        ix = cell_coordinate(x[i, 0], origin[0], cell_size, dims[0])
+        iy = cell_coordinate(x[i, 1], origin[1], cell_size, dims[1])
+        iz = cell_coordinate(x[i, 2], origin[2], cell_size, dims[2])
+        cell_of[i] = (ix * dims[1] + iy) * dims[2] + iz
+        cell_start[cell_of[i] + 1] += 1
+    for cell in range(1, cell_start.shape[0]):
+        cell_start[cell] += cell_start[cell - 1]
+    cursor = cell_start[:-1].copy()
+    cell_particles = np.empty(count, np.int64)
+    for i in range(count):  # ascending i keeps each cell's particles in ascending order
+        cell_particles[cursor[cell_of[i]]] = i
+        cursor[cell_of[i]] += 1
+    return origin, cell_size, dims, cell_start, cell_particles
+
+
+@kernel
+def bounding_box(x):
+    """Lowest corner and size (m) of the box around every finite position."""
+    low = np.full(3, np.inf)
+    high = np.full(3, -np.inf)
+    for i in range(x.shape[0]):
+        for c in range(3):
+            value = x[i, c]
+            if np.abs(value) < np.inf:  # false for NaN and infinities
+                low[c] = min(low[c], value)
+                high[c] = max(high[c], value)
+    for c in range(3):
+        if not low[c] <= high[c]:  # no finite position at all
+            low[c] = high[c] = 0.0
+    return low, high - low
+
+
+@kernel
+def cell_coordinate(value, origin, cell_size, dim):
+    """The cell index of ``value`` along one axis, clamped to the grid (NaN goes to 0)."""
+    q = (value - origin) / cell_size
+    if not q >= 0.0:
+        return 0
+    if q >= dim:
+        return dim - 1
+    return int(q)
+
+
+@kernel
+def cell_range(centre, reach, origin, cell_size, dim):
+    """First and last cell along one axis that [centre - reach, centre + reach] overlaps."""
+    return (cell_coordinate(centre - reach, origin, cell_size, dim),
+            cell_coordinate(centre + reach, origin, cell_size, dim))
+
+
+@kernel
+def is_partner(ball_slot, a, b):
+    """Whether ball a owns the pair (a, b): b is another particle, and not a lower ball."""
+    return b != a and (ball_slot[b] < 0 or b > a)
+
+
+@kernel
+def overlaps(x, radius, a, b):
+    dx, dy, dz = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
+    reach = radius[a] + radius[b]
+    return dx * dx + dy * dy + dz * dz < reach * reach

@@ -1,0 +1,28 @@
+"""`springsim scenes`: the built-in scenes, or one scene as a complete TOML scene file."""
+
+NAME = "scenes"
+HELP = ("list the built-in scenes; with a SCENE, print it as a complete TOML scene file "
+        "to edit (springsim scenes jelly-bowl > my_scene.toml)")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", nargs="?",
+                        help="a built-in scene or a .toml file to print in full")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="change one key of the printed scene (repeatable)")
+
+
+def run(args) -> int:
+    from ..errors import require
+    from ..presets import PRESETS
+    from ..scenefile import load_scene, scene_to_toml
+
+    if args.scene is None:
+        require(not args.set, "--set", args.set[0] if args.set else None,
+                "needs a SCENE to change: springsim scenes SCENE --set KEY=VALUE")
+        width = max(len(name) for name in PRESETS)
+        for name, (_, description) in PRESETS.items():
+            print(f"{name:<{width}}  {description}")
+        return 0
+    print(scene_to_toml(load_scene(args.scene, args.set)), end="")
+    return 0

@@ -1,0 +1,167 @@
+"""Backward (implicit) Euler, linearized as Baraff and Witkin (1998) do. First order, and stable
+at steps far beyond the explicit methods' limits.
+
+Backward Euler takes the new velocity's forces: with dv = v' - v,
+    M dv = h F(x + h (v + dv), v + dv),    x' = x + h v'.
+Linearizing F about the start of the step gives one linear system for dv,
+    (M - h dF/dv - h^2 dF/dx) dv = h (F(x, v) + h dF/dx v),
+solved by filtered conjugate gradients with contacts and pinned particles as constraints
+(``springsim.implicit``). Each further Newton iteration relinearizes about the latest estimate
+(x_k, v_k) = (x + h (v + dv_k), v + dv_k) and solves
+    (M - h dF/dv - h^2 dF/dx)(x_k) ddv = h F(x_k, v_k) - M dv_k.
+The matrix has a block sparsity pattern fixed by the springs, built once per model.
+"""
+import numpy as np
+
+from .._jit import kernel
+from ..errors import require, SceneError
+from ..forces import add_spring_forces
+from ..implicit.cg import filtered_cg
+from ..implicit.constraints import (CONTACT, apply_friction, find_constraints,
+                                    normal_reactions, release_pulling_contacts)
+from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
+                                 particle_mass)
+from ..implicit.pattern import build_block_pattern
+from . import Integrator, register
+from ._steps import finish_step
+
+MAX_CONTACT_RELEASES = 3   # re-solves after freeing pulling contacts, per Newton iteration
+
+
+@kernel
+def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
+    """rhs = h F(x_k, v_k) - M dv_k, plus h^2 dF/dx v in the first iteration (dv_k = 0, x_k = x)."""
+    force[:] = 0.0
+    add_spring_forces(model, x_k, v_k, force)
+    for i in range(x.shape[0]):
+        w = model.inv_mass[i]
+        m = particle_mass(w)
+        for c in range(3):
+            external = (m * model.gravity[c] if w > 0.0 else 0.0) - model.drag[i] * v_k[i, c]
+            rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
+    if first:
+        add_stiffness_product(model, x, v, h * h, rhs)
+
+
+@kernel
+def solve_with_contacts(pattern, blocks, rhs, kind, normal, ddv, tolerance, max_iterations,
+                        reaction, r, s, c, q):
+    """Solve for ddv, freeing contacts the terrain would have to pull and solving again.
+    Leaves the terrain's normal impulses in ``reaction``; returns the CG iterations taken."""
+    iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+                                        max_iterations, 0.0, r, s, c, q)
+    for attempt in range(MAX_CONTACT_RELEASES + 1):
+        block_multiply(pattern, blocks, ddv, q)
+        normal_reactions(kind, normal, q, rhs, reaction)
+        if attempt == MAX_CONTACT_RELEASES or release_pulling_contacts(kind, reaction) == 0:
+            break
+        more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+                                      max_iterations, reference, r, s, c, q)
+        iterations += more
+    return iterations
+
+
+@kernel
+def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
+                        blocks, force, rhs, dv, ddv, x_k, v_k, kind, normal, terrain,
+                        normal_change, reaction, r, s, c, q):
+    """One step; returns the conjugate-gradient iterations it took."""
+    find_constraints(model, x, v, h, kind, normal, terrain, normal_change)
+    dv[:] = 0.0
+    x_k[:] = x
+    v_k[:] = v
+    iterations = 0
+    for newton in range(newton_iterations):
+        assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
+        newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
+        # The solve keeps the constrained components of its start: the contacts' normal
+        # velocity change in the first iteration, nothing more after it.
+        for i in range(x.shape[0]):
+            change = normal_change[i] if newton == 0 and kind[i] == CONTACT else 0.0
+            for k in range(3):
+                ddv[i, k] = change * normal[i, k]
+        iterations += solve_with_contacts(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+                                          max_iterations, reaction, r, s, c, q)
+        for i in range(x.shape[0]):
+            for k in range(3):
+                dv[i, k] += ddv[i, k]
+                v_k[i, k] = v[i, k] + dv[i, k]
+                x_k[i, k] = x[i, k] + h * v_k[i, k]
+    apply_friction(model, kind, normal, terrain, reaction, v_k)
+    for i in range(x.shape[0]):
+        for k in range(3):
+            v[i, k] = v_k[i, k]
+            x[i, k] += h * v[i, k]
+    return iterations
+
+
+@kernel
+def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_iterations,
+            statistics):
+    """Take ``steps`` steps; statistics[0] counts the CG iterations. Returns (done, particle)."""
+    count = x.shape[0]
+    blocks = np.empty((pattern.column.shape[0], 3, 3))
+    force, rhs, dv, ddv = (np.empty_like(x), np.empty_like(x), np.empty_like(x),
+                           np.empty_like(x))
+    x_k, v_k, normal = np.empty_like(x), np.empty_like(x), np.zeros_like(x)
+    r, s, c, q = np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    kind = np.zeros(count, np.int8)
+    terrain = np.zeros(count, np.int64)
+    normal_change, reaction = np.zeros(count), np.zeros(count)
+    for step in range(steps):
+        statistics[0] += backward_euler_step(
+            model, pattern, x, v, h, newton_iterations, tolerance, max_iterations, blocks,
+            force, rhs, dv, ddv, x_k, v_k, kind, normal, terrain, normal_change, reaction,
+            r, s, c, q)
+        particle = finish_step(model, x, v)
+        if particle >= 0:
+            return step + 1, particle
+    return steps, -1
+
+
+@register
+class ImplicitEuler(Integrator):
+    """Options: ``newton_iterations`` (default 1: the Baraff-Witkin step), ``cg_tolerance``
+    (relative residual of each linear solve, default 1e-5) and ``cg_max_iterations``."""
+
+    name = "implicit_euler"
+    order = 1
+    summary = "backward Euler, one linearized solve per step (Baraff-Witkin): large stable steps"
+    OPTIONS = ("newton_iterations", "cg_tolerance", "cg_max_iterations")
+
+    def __init__(self, newton_iterations=1, cg_tolerance=1e-5, cg_max_iterations=500, **others):
+        for key, value in others.items():
+            raise SceneError(f"integrator option {key}", value,
+                             f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
+        require(_is_whole(newton_iterations) and newton_iterations >= 1, "newton_iterations",
+                newton_iterations, "must be a whole number >= 1")
+        require(_is_number(cg_tolerance) and 0 < cg_tolerance < 1, "cg_tolerance",
+                cg_tolerance, "must be a relative residual in (0, 1)")
+        require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1, "cg_max_iterations",
+                cg_max_iterations, "must be a whole number >= 1")
+        self.newton_iterations = int(newton_iterations)
+        self.cg_tolerance = float(cg_tolerance)
+        self.cg_max_iterations = int(cg_max_iterations)
+        self.cg_iterations = np.zeros(1, np.int64)   # running total, for diagnostics
+        self._pattern_model, self._pattern = None, None
+
+    def pattern_for(self, model):
+        """The model's block pattern, built on first use and kept for as long as the model."""
+        if self._pattern_model is not model:
+            self._pattern_model, self._pattern = model, build_block_pattern(model.arrays)
+        return self._pattern
+
+    def advance(self, model, state, dt, steps):
+        done, particle = advance(model.arrays, self.pattern_for(model), state.positions,
+                                 state.velocities, float(dt), int(steps), self.newton_iterations,
+                                 self.cg_tolerance, self.cg_max_iterations, self.cg_iterations)
+        return int(done), int(particle)
+
+
+def _is_whole(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float, np.number)) and not isinstance(value, bool) \
+        and np.isfinite(value)

@@ -1,0 +1,17 @@
+"""Drawing simulations with polyscope: shared by the interactive viewer and headless video.
+
+``write_video(model, times, positions, path)`` renders recorded frames to .mp4, .gif or a folder
+of PNGs with no display and no GPU (polyscope's EGL backend on Mesa). polyscope is imported
+only when this package is.
+"""
+from .backend import RenderUnavailable, capture, start_renderer
+from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_box, scene_box
+from .drawing import DrawOptions, SceneDrawing
+from .movie import render_video, write_video
+from .recording import record, steps_per_frame
+from .video import FrameWriter, output_format
+
+__all__ = ["write_video", "render_video", "DrawOptions", "SceneDrawing", "Camera",
+           "CAMERA_NAMES", "camera_path", "frame_box", "scene_box", "apply_camera",
+           "start_renderer", "capture", "RenderUnavailable", "FrameWriter", "output_format",
+           "record", "steps_per_frame"]

@@ -1,0 +1,61 @@
+"""Starting polyscope, once per process: a window, or the headless EGL backend (no GPU needed).
+
+polyscope can be initialised only once in a process, so every caller goes through
+``start_renderer``: the first call decides window or headless, later calls only resize.
+"""
+import numpy as np
+import polyscope as ps
+
+from .colors import BACKGROUND_COLOR
+
+HEADLESS_BACKEND = "openGL3_egl"
+
+
+class RenderUnavailable(RuntimeError):
+    """No OpenGL context could be made: no display for a window, or no EGL for headless."""
+
+
+def start_renderer(*, headless: bool, width: int, height: int) -> str:
+    """Start polyscope (if not started) at ``width`` x ``height`` pixels; return the backend."""
+    if ps.is_initialized():
+        if ps.is_headless():
+            ps.set_window_size(int(width), int(height))
+        return ps.get_render_engine_backend_name()
+    ps.set_program_name("springsim")
+    ps.set_use_prefs_file(False)          # polyscope would otherwise write .polyscope.ini here
+    ps.set_errors_throw_exceptions(True)
+    ps.set_window_size(int(width), int(height))
+    try:
+        if headless:
+            ps.set_allow_headless_backends(True)
+            ps.init(HEADLESS_BACKEND)
+        else:
+            ps.init()
+    except RuntimeError as error:
+        raise RenderUnavailable(_advice(headless, error)) from error
+    _configure_scene()
+    return ps.get_render_engine_backend_name()
+
+
+def _configure_scene() -> None:
+    ps.set_up_dir("y_up")
+    ps.set_front_dir("z_front")
+    ps.set_ground_plane_mode("none")      # terrains are drawn as structures of their own
+    ps.set_automatically_compute_scene_extents(False)
+    ps.set_background_color(BACKGROUND_COLOR)
+    ps.set_frame_tick_limit_fps_mode("ignore_limits")
+    ps.set_build_default_gui_panels(False)
+
+
+def _advice(headless: bool, error: Exception) -> str:
+    if headless:
+        return (f"headless rendering needs EGL with Mesa (Debian: apt-get install libegl1 "
+                f"libegl-mesa0 libgl1-mesa-dri): {error}")
+    return (f"no window could be opened (is there a display? DISPLAY must be set; on a machine "
+            f"without one use `springsim render`, or run under xvfb-run): {error}")
+
+
+def capture(include_ui: bool = False) -> np.ndarray:
+    """Render the current view and return it as an (H, W, 3) uint8 RGB image."""
+    rgba = ps.screenshot_to_buffer(transparent_bg=False, include_UI=include_ui)
+    return np.ascontiguousarray(rgba[..., :3])

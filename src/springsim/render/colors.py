@@ -1,0 +1,18 @@
+"""The colours of everything drawn (RGB in [0, 1]); springs use the course framework's colours."""
+from ..springs import SpringKind
+
+SPRING_COLORS = {
+    SpringKind.STRUCTURAL: (0.0, 0.85, 0.9),   # cyan
+    SpringKind.SHEAR: (0.95, 0.85, 0.1),       # yellow
+    SpringKind.BEND: (0.2, 0.8, 0.25),         # green
+    SpringKind.FACE: (0.75, 0.35, 0.9),        # violet: the long face-to-face springs
+}
+BODY_COLORS = ((0.95, 0.55, 0.2), (0.25, 0.55, 0.95), (0.9, 0.35, 0.55), (0.55, 0.8, 0.3))
+CLOTH_BACK_COLOR = (0.95, 0.9, 0.75)          # the underside of an open surface
+PARTICLE_COLOR = (0.15, 0.15, 0.2)
+BALL_COLOR = (0.6, 0.62, 0.7)
+TERRAIN_COLOR = (0.72, 0.74, 0.7)
+TERRAIN_CHECKER_COLORS = ((0.78, 0.8, 0.76), (0.62, 0.64, 0.6))
+BOWL_COLOR = (0.55, 0.68, 0.78)
+BACKGROUND_COLOR = (0.93, 0.95, 0.97)
+LABEL_COLOR = (40, 40, 48)                    # the time label on video frames, 8-bit RGB

@@ -1,0 +1,43 @@
+"""Rendering recorded frames of a simulation to a video (MP4, GIF) or a folder of PNGs, headless."""
+import numpy as np
+from tqdm import tqdm
+
+from ..errors import require
+from .backend import capture, start_renderer
+from .camera import apply_camera, camera_path
+from .drawing import DrawOptions, SceneDrawing
+from .label import stamp_time
+from .video import FrameWriter, check_output
+
+
+def write_video(model, times, positions, path, *, fps=60, width=960, height=540, camera="auto"):
+    """Render frames ``positions`` (F, P, 3) at simulated ``times`` (F,) s to ``path``.
+
+    ``path`` ends in .mp4 or .gif, or names a folder for PNG frames; ``camera`` is one of
+    ``springsim.render.CAMERA_NAMES``. Returns the path written.
+    """
+    return render_video(model, times, positions, path, fps=fps, width=width, height=height,
+                        camera=camera)
+
+
+def render_video(model, times, positions, path, *, fps=60, width=960, height=540,
+                 camera="auto", draw: DrawOptions | None = None, progress: bool = True):
+    """``write_video`` with a choice of what is drawn, and of the progress bar."""
+    positions = np.asarray(positions)
+    times = np.asarray(times, float)
+    require(positions.ndim == 3 and positions.shape[1:] == (model.particle_count, 3),
+            "positions", positions.shape, f"must be (frames, {model.particle_count}, 3)")
+    require(len(positions) >= 1, "positions", positions.shape, "needs at least one frame")
+    require(times.shape == (len(positions),), "times", times.shape,
+            f"must hold one time per frame ({len(positions)})")
+    check_output(path, width, height, fps)
+    cameras = camera_path(camera, model, positions, width / height)
+    start_renderer(headless=True, width=width, height=height)
+    drawing = SceneDrawing(model, draw, positions[0])
+    with FrameWriter(path, fps, width, height) as writer:
+        for frame in tqdm(range(len(positions)), desc="rendering", unit="frame",
+                          disable=not progress):
+            drawing.update(positions[frame])
+            apply_camera(cameras[frame])
+            writer.append(stamp_time(capture(), times[frame]))
+    return writer.path

@@ -1,0 +1,93 @@
+"""Triangle meshes of the terrains (plain NumPy): a checkered patch of a plane, a sphere, a bowl.
+
+Planes are infinite, so what is drawn is a square patch centred near the bodies; its checker
+cells are anchored to the plane's point so that the pattern stays put when the patch is moved,
+and a sliding body is seen to move over it.
+"""
+import math
+
+import numpy as np
+
+
+def plane_basis(normal) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors u, w spanning the plane, with u x w = normal."""
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    u = np.cross(n, helper)
+    u /= np.linalg.norm(u)
+    return u, np.cross(n, u)
+
+
+def plane_patch(point, normal, near, half_size: float, cell: float):
+    """A square of about 2 * half_size (m) on the plane, centred at the cell nearest ``near``.
+
+    Returns vertices (V, 3), triangles (T, 3) wound so that they face ``normal``, and a checker
+    colour index (T,) of 0 or 1 per triangle.
+    """
+    point = np.asarray(point, float)
+    u, w = plane_basis(normal)
+    offset = np.asarray(near, float) - point
+    # anchor the grid to whole cells from the plane's point, so the checker does not slide
+    center = point + cell * (np.round(offset @ u / cell) * u + np.round(offset @ w / cell) * w)
+    cells = max(1, int(math.ceil(half_size / cell)))
+    steps = np.arange(-cells, cells + 1) * cell
+    grid_u, grid_w = np.meshgrid(steps, steps, indexing="ij")
+    vertices = center + grid_u[..., None] * u + grid_w[..., None] * w
+    count = 2 * cells + 1
+    index = np.arange(count * count).reshape(count, count)
+    a, b = index[:-1, :-1].ravel(), index[1:, :-1].ravel()
+    c, d = index[1:, 1:].ravel(), index[:-1, 1:].ravel()
+    triangles = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    i, j = np.indices((count - 1, count - 1))
+    parity = ((i + j) % 2).ravel()
+    return vertices.reshape(-1, 3), triangles, np.concatenate([parity, parity])
+
+
+def latitude_mesh(center, radius: float, polar_angles, longitudes: int = 64):
+    """A sphere band between the given polar angles (radians from +y), facing outwards.
+
+    An angle of 0 or pi closes the band with a pole.
+    """
+    center = np.asarray(center, float)
+    theta = np.asarray(polar_angles, float)
+    top_pole, bottom_pole = theta[0] <= 0.0, theta[-1] >= math.pi
+    rings = theta[(theta > 0.0) & (theta < math.pi)]
+    phi = np.linspace(0.0, 2 * math.pi, longitudes, endpoint=False)
+    directions = np.stack([np.outer(np.sin(rings), np.cos(phi)),
+                           np.outer(np.cos(rings), np.ones_like(phi)),
+                           np.outer(np.sin(rings), np.sin(phi))], axis=-1)
+    vertices = [center + radius * directions.reshape(-1, 3)]
+    ring = np.arange(len(rings) * longitudes).reshape(len(rings), longitudes)
+    a, b = ring[:-1], np.roll(ring[:-1], -1, axis=1)
+    c, d = np.roll(ring[1:], -1, axis=1), ring[1:]
+    triangles = [np.stack([a.ravel(), b.ravel(), c.ravel()], 1),
+                 np.stack([a.ravel(), c.ravel(), d.ravel()], 1)]
+    count = ring.size
+    if top_pole:
+        vertices.append(center + radius * np.array([[0.0, 1.0, 0.0]]))
+        first = ring[0]
+        triangles.append(np.stack([np.full(longitudes, count), np.roll(first, -1), first], 1))
+        count += 1
+    if bottom_pole:
+        vertices.append(center + radius * np.array([[0.0, -1.0, 0.0]]))
+        last = ring[-1]
+        triangles.append(np.stack([last, np.roll(last, -1), np.full(longitudes, count)], 1))
+    return np.concatenate(vertices), np.concatenate(triangles)
+
+
+def sphere_mesh(center, radius: float, latitudes: int = 32, longitudes: int = 64):
+    """A closed sphere, facing outwards."""
+    return latitude_mesh(center, radius, np.linspace(0.0, math.pi, latitudes + 1), longitudes)
+
+
+def bowl_mesh(center, radius: float, latitudes: int = 16, longitudes: int = 64):
+    """The lower half of a sphere, facing inwards (towards the centre, where the bodies are).
+
+    Drawn with back faces culled, the near wall (which faces away from the camera) disappears
+    from any viewpoint while the far wall stays: the body inside is always in sight.
+    """
+    vertices, triangles = latitude_mesh(center, radius,
+                                        np.linspace(math.pi / 2, math.pi, latitudes + 1),
+                                        longitudes)
+    return vertices, triangles[:, ::-1]
