@@ -7,10 +7,12 @@ whichever method found them, so that both methods give bit-identical simulations
 
 - ``brute_force_pairs`` tests every ball against every particle: the cheapest for a few balls
   (cloth-balls tests 4 x 629).
-- ``grid_pairs`` sorts the particles into a uniform grid over their bounding box (a counting sort,
-  rebuilt every step) whose cells are as wide as the largest ball, and tests each ball only against
-  the particles of the cells its reach (its radius plus the largest radius) overlaps: at most
-  3 x 3 x 3 cells. The cost grows with particles plus balls, not with their product.
+- ``grid_pairs`` sorts the particles into uniform grids (a counting sort by cell, rebuilt every
+  step) with cells as wide as the largest ball, one grid for the points (particles of radius 0:
+  cloth and cube particles) and one for the balls, and tests each ball only against the members of
+  the cells it can reach: a point within its radius (at most 2 x 2 x 2 cells), another ball within
+  the sum of both radii (at most 3 x 3 x 3 cells). The cost grows like particles plus balls, not
+  like their product.
 """
 import math
 
@@ -53,45 +55,56 @@ def brute_force_pairs(x, radius, balls, ball_slot):
 
 @kernel
 def grid_pairs(x, radius, balls, ball_slot):
-    """Every contact, by testing each ball against the particles of the grid cells it reaches."""
+    """Every contact, by testing each ball against the particles of the grid cells it reaches.
+
+    Points and balls go in two grids: a ball reaches a point within its own radius, but another
+    ball within the sum of both radii, so each grid is searched no further than it needs.
+    """
     largest_radius = 0.0
-    for i in range(radius.shape[0]):
-        largest_radius = max(largest_radius, radius[i])
-    grid = build_grid(x, 2.0 * largest_radius)
+    for a in balls:
+        largest_radius = max(largest_radius, radius[a])
+    cell_size = 2.0 * largest_radius  # the largest ball's diameter
+    point_grid = build_grid(x, np.flatnonzero(ball_slot < 0), cell_size)
+    ball_grid = build_grid(x, balls, cell_size)
     capacity = 4 * balls.shape[0] + 16
     while True:
         owner, partner = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
         count = 0
         for a in balls:
             first = count
-            count = collect_partners(x, radius, ball_slot, grid, a, radius[a] + largest_radius,
+            count = collect_partners(x, radius, point_grid, a, radius[a], -1, partner, count)
+            # a ball-ball pair belongs to the lower-numbered ball
+            count = collect_partners(x, radius, ball_grid, a, radius[a] + largest_radius, a,
                                      partner, count)
             owner[first:min(count, capacity)] = a
             # cells are visited in space order; sort to the canonical (particle number) order
             partner[first:min(count, capacity)].sort()
         if count <= capacity:
             return as_pairs(owner, partner, count)
-        capacity = count
+        capacity = count  # the buffers were too small: now the count is known
 
 
 @kernel
-def collect_partners(x, radius, ball_slot, grid, a, reach, partner, count):
-    """Append to ``partner`` (while it has room) the particles in contact with ball a among the
-    grid cells within ``reach`` of it; return the new count, room or not."""
-    origin, cell_size, dims, cell_start, cell_particles = grid
+def collect_partners(x, radius, grid, a, reach, after, partner, count):
+    """Append to ``partner`` (while it has room) the grid's particles numbered above ``after``
+    that touch ball a, searching the cells within ``reach`` of it; return the new count, room or
+    not."""
+    origin, cell_size, dims, cell_start, members, member_x = grid
     x_low, x_high = cell_range(x[a, 0], reach, origin[0], cell_size, dims[0])
     y_low, y_high = cell_range(x[a, 1], reach, origin[1], cell_size, dims[1])
     z_low, z_high = cell_range(x[a, 2], reach, origin[2], cell_size, dims[2])
+    xa, ya, za, ra = x[a, 0], x[a, 1], x[a, 2], radius[a]
     for ix in range(x_low, x_high + 1):
         for iy in range(y_low, y_high + 1):
-            for iz in range(z_low, z_high + 1):
-                cell = (ix * dims[1] + iy) * dims[2] + iz
-                for k in range(cell_start[cell], cell_start[cell + 1]):
-                    b = cell_particles[k]
-                    if is_partner(ball_slot, a, b) and overlaps(x, radius, a, b):
-                        if count < partner.shape[0]:
-                            partner[count] = b
-                        count += 1
+            first = (ix * dims[1] + iy) * dims[2]
+            for k in range(cell_start[first + z_low], cell_start[first + z_high + 1]):
+                dx, dy, dz = xa - member_x[k, 0], ya - member_x[k, 1], za - member_x[k, 2]
+                b = members[k]
+                contact = ra + radius[b]
+                if dx * dx + dy * dy + dz * dz < contact * contact and b > after:
+                    if count < partner.shape[0]:
+                        partner[count] = b
+                    count += 1
     return count
 
 
@@ -104,18 +117,20 @@ def as_pairs(owner, partner, count):
 
 
 @kernel
-def build_grid(x, cell_size):
-    """A uniform grid of the particles: (origin, cell size, dims, cell_start, cell_particles).
+def build_grid(x, members, cell_size):
+    """A uniform grid of the particles ``members``:
+    (origin, cell size, dims, cell_start, sorted members, their positions).
 
-    The particles of cell c are ``cell_particles[cell_start[c]:cell_start[c + 1]]``, ascending.
-    Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``. Non-finite positions are
-    left out of the bounding box and land in a border cell, where no distance test passes.
+    Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``; its particles are
+    ``members[cell_start[c]:cell_start[c + 1]]`` (ascending), with their positions alongside so
+    that a search reads memory in order. Consecutive z cells are consecutive in memory, so a
+    search reads a whole run of z cells at once. Non-finite positions are left out of the
+    bounding box and land in a border cell, where no distance test passes.
     """
-    count = x.shape[0]
-    origin, extent = bounding_box(x)
+    count = members.shape[0]
+    origin, extent = bounding_box(x, members)
     if not cell_size > 0.0:
         cell_size = 1.0
-    dims = np.empty(3, np.int64)
     while True:
         cells = 1.0
         for c in range(3):
@@ -123,32 +138,38 @@ def build_grid(x, cell_size):
         if cells <= MAX_CELLS_PER_PARTICLE * count + 64:
             break
         cell_size *= 2.0
+    dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(math.floor(extent[c] / cell_size)) + 1
     cell_of = np.empty(count, np.int64)
     cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
-    for i in range(count):
+    for k in range(count):
+        i = members[k]
         ix = cell_coordinate(x[i, 0], origin[0], cell_size, dims[0])
         iy = cell_coordinate(x[i, 1], origin[1], cell_size, dims[1])
         iz = cell_coordinate(x[i, 2], origin[2], cell_size, dims[2])
-        cell_of[i] = (ix * dims[1] + iy) * dims[2] + iz
-        cell_start[cell_of[i] + 1] += 1
+        cell_of[k] = (ix * dims[1] + iy) * dims[2] + iz
+        cell_start[cell_of[k] + 1] += 1
     for cell in range(1, cell_start.shape[0]):
         cell_start[cell] += cell_start[cell - 1]
     cursor = cell_start[:-1].copy()
-    cell_particles = np.empty(count, np.int64)
-    for i in range(count):  # ascending i keeps each cell's particles in ascending order
-        cell_particles[cursor[cell_of[i]]] = i
-        cursor[cell_of[i]] += 1
-    return origin, cell_size, dims, cell_start, cell_particles
+    sorted_members = np.empty(count, np.int64)
+    sorted_x = np.empty((count, 3))
+    for k in range(count):  # in members' order, which keeps each cell's particles ascending
+        slot = cursor[cell_of[k]]
+        cursor[cell_of[k]] += 1
+        i = members[k]
+        sorted_members[slot] = i
+        sorted_x[slot, 0], sorted_x[slot, 1], sorted_x[slot, 2] = x[i, 0], x[i, 1], x[i, 2]
+    return origin, cell_size, dims, cell_start, sorted_members, sorted_x
 
 
 @kernel
-def bounding_box(x):
-    """Lowest corner and size (m) of the box around every finite position."""
+def bounding_box(x, members):
+    """Lowest corner and size (m) of the box around the members' finite positions."""
     low = np.full(3, np.inf)
     high = np.full(3, -np.inf)
-    for i in range(x.shape[0]):
+    for i in members:
         for c in range(3):
             value = x[i, c]
             if np.abs(value) < np.inf:  # false for NaN and infinities

@@ -64,7 +64,7 @@ def apply_contact_forces(model, x, v, h, a):
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             # The reaction cancels the push into the surface; a particle already moving away
             # keeps only the part of the push that stops it within this step (see module doc).
-            reaction = -a_n - max(v_n, 0.0) / h
+            reaction = -a_n - (max(v_n, 0.0) + max(phi, 0.0) / h) / h
             if reaction <= 0.0:
                 continue  # pulled away from the surface, or leaving fast: no reaction, no friction
             # tangential acceleration and tangential (sliding) velocity
@@ -75,7 +75,7 @@ def apply_contact_forces(model, x, v, h, a):
             size = math.sqrt(sx * sx + sy * sy + sz * sz)
             limit = friction[t] * reaction
             scale = 1.0 if size <= limit else limit / size
-            a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
+            a_normal = a_n + reaction
             a[i, 0] = ax + scale * sx + a_normal * nx
             a[i, 1] = ay + scale * sy + a_normal * ny
             a[i, 2] = az + scale * sz + a_normal * nz
@@ -99,7 +99,7 @@ def resolve_terrain_impacts(model, x, v):
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             if v_n < 0.0:
-                e = restitution[t] if v_n < -resting_speed[t] else 0.0
+                e = restitution[t]
                 bounce = (1.0 + e) * v_n
                 v[i, 0] -= bounce * nx
                 v[i, 1] -= bounce * ny

@@ -15,17 +15,21 @@ A scene file says what a preset says (see docs/scene-files.md)::
     [[terrains]]
     type = "plane"
 
-The mapping is generic over the dataclasses: a table's keys are its dataclass's fields, a nested
-dataclass field is a sub-table (given keys replace those of the default, the rest are kept), and
-the type of each value is read from the field's annotation, or from its default where the
-annotation is a bare ``tuple``: a default of floats is a fixed-length vector (``gravity``), of
-tuples a list of such vectors, of ints or empty a list of integers of any length (``pinned``).
-Annotate ``tuple[float, ...]`` and the like to say otherwise. A new body kind needs one line in
-``BODY_TYPES``; terrain kinds come from ``terrains.TERRAIN_TYPES``.
+The mapping is generic over the dataclasses, so that a new body kind needs only its line in
+``BODY_TYPES`` (terrain kinds come from ``terrains.TERRAIN_TYPES``):
+
+- a table's keys are its dataclass's fields; a key it does not give keeps its default;
+- a field holding a dataclass is a sub-table (``[bodies.structural]``), and the keys it gives
+  replace those of the default; a list of dataclasses is an array of tables (``[[bodies.balls]]``);
+- the type of a value is the field's annotation (``int``, ``float``, ``bool``, ``str``,
+  ``tuple[float, ...]``, ``str | list``, a dataclass). Where the annotation is a bare ``tuple`` or
+  ``list``, its default says what it holds: floats make a vector of that length (``gravity``),
+  tuples a list of such vectors, dataclasses a list of tables, ints or nothing a list of whole
+  numbers of any length (``pinned``).
 
 Overrides address list items by index: ``bodies.0.particles_per_edge=7``,
-``terrains.0.friction=0.5``, ``bodies.0.structural.ks=3000``. Values are TOML values
-(``1e-3``, ``true``, ``[0, -1.62, 0]``, ``{ks = 10, kd = 1}``); a bare word is a string.
+``terrains.0.friction=0.5``, ``bodies.0.structural.ks=3000``, ``gravity.1=-1.62``. Values are TOML
+values (``1e-3``, ``true``, ``[0, -1.62, 0]``, ``{ks = 10, kd = 1}``); a bare word is a string.
 """
 import dataclasses
 import json
@@ -34,17 +38,20 @@ import numbers
 import tomllib
 import types
 import typing
+from dataclasses import MISSING
 from pathlib import Path
 
 import numpy as np
 
+from .bodies.balls import Balls
+from .bodies.cloth import Cloth
 from .bodies.cube import Cube
 from .errors import SceneError, require
 from .presets import PRESETS, preset
 from .scene import Scene
 from .terrains import TERRAIN_TYPES
 
-BODY_TYPES = {"cube": Cube}
+BODY_TYPES = {"cube": Cube, "cloth": Cloth, "balls": Balls}
 
 # Scene fields that hold a list of tables, each with a ``type`` chosen from a registry.
 TYPED_LISTS = {"bodies": ("body", BODY_TYPES), "terrains": ("terrain", TERRAIN_TYPES)}
@@ -109,42 +116,61 @@ def parse_value(text: str):
     return text
 
 
-# --- walking the dataclasses -------------------------------------------------------------------
+# --- overrides: one value deep inside the scene ---------------------------------------------------
 
 def set_path(node, parts: list[str], value, prefix: str, full_key: str):
-    """A copy of ``node`` (a dataclass or a typed list) with the value at ``parts`` replaced.
+    """A copy of ``node`` (a dataclass, list or tuple) with the value at ``parts`` replaced.
 
     ``prefix`` is the key of ``node``; errors about the path name the whole ``full_key``.
     """
     head, rest = parts[0], parts[1:]
     key = _join(prefix, head)
-    if isinstance(node, list):
+    if isinstance(node, (list, tuple)):
         index = _list_index(node, head, prefix, full_key, value)
         items = list(node)
         if rest:
-            items[index] = set_path(items[index], rest, value, key, full_key)
-        else:
+            items[index] = _descend(items[index], rest, value, key, full_key)
+        elif prefix in TYPED_LISTS:
             items[index] = typed_item(value, prefix, items[index], key)
-        return items
+        else:
+            items[index] = convert_like(value, items[index], key)
+        return type(node)(items)
     fields = init_fields(type(node))
     require(head in fields, full_key, value,
             f"unknown key; {describe(node, prefix)} takes " + ", ".join(fields))
     current = getattr(node, head)
-    if not rest:
-        new = convert_field(type(node), fields[head], value, current, key)
-    elif dataclasses.is_dataclass(current) or _is_typed_list(node, head):
-        new = set_path(current, rest, value, key, full_key)
+    if rest:
+        new = _descend(current, rest, value, key, full_key)
     else:
-        raise SceneError(full_key, value,
-                         f"unknown key; {key} is a single value, set it whole: {key}=...")
+        new = convert_field(type(node), fields[head], value, current, key)
     return dataclasses.replace(node, **{head: new})
 
 
+def _descend(child, rest: list[str], value, key: str, full_key: str):
+    require(dataclasses.is_dataclass(child) or isinstance(child, (list, tuple)), full_key, value,
+            f"unknown key; {key} is a single value, set it whole: {key}=...")
+    return set_path(child, rest, value, key, full_key)
+
+
+def _list_index(items, text: str, list_key: str, full_key: str, value) -> int:
+    """The item ``text`` names in ``items``; the error names the whole override key."""
+    count = len(items)
+    if count == 0:
+        allowed = f"{list_key} is empty, so no index exists"
+    else:
+        indices = "0" if count == 1 else f"0 to {count - 1}"
+        allowed = f"{list_key} has {count} item{'s' * (count > 1)}, so the index must be {indices}"
+    require(text.isdigit() and int(text) < count, full_key, value, f"unknown key; {allowed}")
+    return int(text)
+
+
+# --- tables: TOML tables to dataclasses ---------------------------------------------------------
+
 def merge_table(base, table, prefix: str):
     """A copy of the dataclass ``base`` with the keys of ``table`` replaced, each checked."""
-    require(isinstance(table, dict), prefix or "scene", table,
-            "must be a table of keys: " + ", ".join(init_fields(type(base))))
     fields = init_fields(type(base))
+    require(isinstance(table, dict), prefix or "scene", table,
+            "must be a table with the keys " + ", ".join(fields))
     for name in table:
         require(name in fields, _join(prefix, name), table[name],
                 f"unknown key; {describe(base, prefix)} takes " + ", ".join(fields))
@@ -154,17 +180,24 @@ def merge_table(base, table, prefix: str):
     return dataclasses.replace(base, **changes)
 
 
-def convert_field(owner: type, field: dataclasses.Field, value, current, key: str):
-    if owner is Scene and field.name in TYPED_LISTS:
-        require(isinstance(value, list), key, value,
-                f"must be a list of tables ([[{field.name}]]), each with a type")
-        return [typed_item(item, field.name, None, f"{key}.{i}") for i, item in enumerate(value)]
-    annotation = typing.get_type_hints(owner).get(field.name, typing.Any)
-    return convert(value, annotation, current, _default_of(field), key)
+def new_dataclass(cls, table, key: str):
+    """A ``cls`` from a table alone: the fields the table does not give keep their defaults."""
+    fields = init_fields(cls)
+    require(isinstance(table, dict), key, table, "must be a table with the keys "
+            + ", ".join(fields))
+    for name in table:
+        require(name in fields, _join(key, name), table[name],
+                f"unknown key; {key} takes " + ", ".join(fields))
+    missing = [name for name, field in fields.items()
+               if name not in table and _default_of(field) is MISSING]
+    require(not missing, key, table, "needs the keys " + ", ".join(missing))
+    return cls(**{name: convert_field(cls, fields[name], value, MISSING, _join(key, name))
+                  for name, value in table.items()})
 
 
 def typed_item(value, list_name: str, current, key: str):
-    """One body or terrain: a table with a ``type`` builds a new one, without it edits ``current``."""
+    """One body or terrain: a table with a ``type`` makes a new one, one without edits
+    ``current``."""
     label, registry = TYPED_LISTS[list_name]
     require(isinstance(value, dict), key, value, f"must be a table describing a {label}")
     if "type" not in value and current is not None:
@@ -176,126 +209,196 @@ def typed_item(value, list_name: str, current, key: str):
     return merge_table(registry[kind](), rest, key)
 
 
+def convert_field(owner: type, field: dataclasses.Field, value, current, key: str):
+    if owner is Scene and field.name in TYPED_LISTS:
+        require(isinstance(value, list), key, value,
+                f"must be a list of tables ([[{field.name}]]), each with a type")
+        return [typed_item(item, field.name, None, f"{key}.{i}") for i, item in enumerate(value)]
+    annotation = typing.get_type_hints(owner).get(field.name, typing.Any)
+    return convert(value, annotation, current, _default_of(field), key)
+
+
+# --- values: TOML values to what a field holds ----------------------------------------------------
+
 def convert(value, annotation, current, default, key: str):
-    """``value`` (from TOML) as the Python value a field of type ``annotation`` holds."""
+    """``value`` (from TOML) as the value of a field annotated ``annotation``.
+
+    ``current`` is the field's present value (a dataclass there is edited, not replaced) and
+    ``default`` its default (which says what a bare ``tuple`` holds); either may be MISSING.
+    """
     annotation = _strip_optional(annotation)
-    origin = typing.get_origin(annotation)
-    if dataclasses.is_dataclass(annotation) or dataclasses.is_dataclass(current):
-        base = current if dataclasses.is_dataclass(current) else None
-        if base is None:
-            return _new_dataclass(annotation, value, key)
-        return merge_table(base, value, key)
-    if annotation is bool:
-        require(isinstance(value, bool), key, value, "must be true or false")
-        return value
-    if annotation is int:
-        require(_is_integer(value), key, value, "must be a whole number (no decimal point)")
-        return int(value)
-    if annotation is float:
-        require(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
-        return float(value)
-    if annotation is str:
-        require(isinstance(value, str), key, value, "must be a string (in quotes)")
-        return value
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        return _convert_union(value, typing.get_args(annotation), current, default, key)
+    if dataclasses.is_dataclass(current):
+        return merge_table(current, value, key)
+    if dataclasses.is_dataclass(annotation):
+        return new_dataclass(annotation, value, key)
+    if annotation in (bool, int, float, str):
+        return _scalar(value, annotation, key)
     if annotation is np.ndarray:
-        return _vector(value, None, float, key, np.asarray)
-    if annotation in (tuple, list) or origin in (tuple, list):
+        return np.asarray(_plain_list(value, key))
+    if annotation in (tuple, list) or typing.get_origin(annotation) in (tuple, list):
         return _sequence(value, annotation, default, key)
+    if annotation is typing.Any and current is not MISSING:
+        return convert_like(value, current, key)
     require(_is_plain(value), key, value, "must be a number, boolean, string or array")
     return value
+
+
+def convert_like(value, example, key: str):
+    """``value`` as the same kind of value as ``example`` (an item of a list or tuple)."""
+    if dataclasses.is_dataclass(example):
+        return merge_table(example, value, key)
+    if type(example) in (bool, int, float, str):
+        return _scalar(value, type(example), key)
+    if isinstance(example, (tuple, list)):
+        return _like_default(value, example, type(example), key)
+    return convert(value, typing.Any, MISSING, MISSING, key)
+
+
+def _scalar(value, kind: type, key: str):
+    if kind is bool:
+        require(isinstance(value, bool), key, value, "must be true or false")
+    elif kind is int:
+        require(_is_integer(value), key, value, "must be a whole number (no decimal point)")
+    elif kind is float:
+        require(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
+    else:
+        require(isinstance(value, str), key, value, "must be a string (in quotes)")
+    return kind(value)
+
+
+def _convert_union(value, alternatives, current, default, key: str):
+    """The alternative whose kind the value has (a string for ``str | list``); when several
+    could take it, the first that accepts it."""
+    fitting = [kind for kind in alternatives if _kind_fits(value, kind)]
+    errors = []
+    for kind in fitting or alternatives:
+        try:
+            return convert(value, kind, current, default, key)
+        except SceneError as error:
+            if len(fitting) == 1:
+                raise
+            errors.append(error.allowed)
+    wanted = [errors[0]] + [text.removeprefix("must be ") for text in errors[1:]]
+    raise SceneError(key, value, " or ".join(dict.fromkeys(wanted)))
+
+
+def _kind_fits(value, kind) -> bool:
+    kind = typing.get_origin(kind) or kind
+    if kind in (tuple, list, np.ndarray):
+        return isinstance(value, list)
+    if kind in (int, float):
+        return _is_number(value)
+    if kind in (bool, str, dict):
+        return isinstance(value, kind)
+    if dataclasses.is_dataclass(kind):
+        return isinstance(value, dict)
+    return True
 
 
 def _sequence(value, annotation, default, key: str):
     container = tuple if tuple in (annotation, typing.get_origin(annotation)) else list
     arguments = typing.get_args(annotation)
-    if arguments and arguments[-1] is not Ellipsis:        # tuple[float, float, float]
-        require(isinstance(value, list) and len(value) == len(arguments), key, value,
+    require(isinstance(value, list), key, value, "must be an array")
+    if arguments and arguments[-1] is not Ellipsis and container is tuple:   # tuple[float, float]
+        require(len(value) == len(arguments), key, value,
                 f"must be an array of {len(arguments)} values")
-        return container(convert(item, kind, None, dataclasses.MISSING, f"{key}.{i}")
-                         for i, (item, kind) in enumerate(zip(value, arguments)))
-    if arguments:                                           # tuple[int, ...], list[float]
-        require(isinstance(value, list), key, value, "must be an array")
-        return container(convert(item, arguments[0], None, dataclasses.MISSING, f"{key}.{i}")
+        return tuple(convert(item, kind, MISSING, MISSING, f"{key}.{i}")
+                     for i, (item, kind) in enumerate(zip(value, arguments)))
+    if arguments:                                                           # tuple[int, ...]
+        return container(convert(item, arguments[0], MISSING, MISSING, f"{key}.{i}")
                          for i, item in enumerate(value))
-    return _sequence_like_default(value, default, container, key)
+    return _like_default(value, default, container, key)
 
 
-def _sequence_like_default(value, default, container, key: str):
-    """A bare ``tuple`` field: its default says what it holds (see the module docstring)."""
-    if default is dataclasses.MISSING or default is None:
-        require(isinstance(value, list) and all(_is_plain(item) for item in value), key, value,
-                "must be an array")
-        return container(value)
-    default = tuple(default)
+def _like_default(value, default, container, key: str):
+    """A bare ``tuple`` or ``list`` field: its default says what it holds (see the module doc)."""
+    if not isinstance(default, (tuple, list)):
+        return container(_plain_list(value, key))
+    require(isinstance(value, list), key, value, "must be an array")
+    if default and all(dataclasses.is_dataclass(item) for item in default):
+        return container(new_dataclass(type(default[0]), item, f"{key}.{i}")
+                         for i, item in enumerate(value))
     if default and all(isinstance(item, (tuple, list)) for item in default):
-        require(isinstance(value, list), key, value, "must be an array of arrays")
-        return container(_sequence_like_default(row, default[0], tuple, f"{key}.{i}")
+        return container(_like_default(row, default[0], type(default[0]), f"{key}.{i}")
                          for i, row in enumerate(value))
     if default and all(isinstance(item, float) for item in default):
-        return _vector(value, len(default), float, key, container)
+        require(len(value) == len(default) and all(map(_is_finite_number, value)), key, value,
+                f"must be an array of {len(default)} finite numbers")
+        return container(float(item) for item in value)
     if all(_is_integer(item) for item in default):
-        return _vector(value, None, int, key, container)
+        require(all(map(_is_integer, value)), key, value, "must be an array of whole numbers")
+        return container(value)
+    return container(_plain_list(value, key))
+
+
+def _plain_list(value, key: str) -> list:
     require(isinstance(value, list) and all(_is_plain(item) for item in value), key, value,
-            "must be an array")
-    return container(value)
-
-
-def _vector(value, length, kind, key: str, container):
-    what = f"{length} " if length else ""
-    noun = "whole numbers" if kind is int else "finite numbers"
-    valid = _is_integer if kind is int else _is_finite_number
-    require(isinstance(value, list) and (length is None or len(value) == length)
-            and all(valid(item) for item in value), key, value,
-            f"must be an array of {what}{noun}")
-    return container(kind(item) for item in value)
-
-
-def _new_dataclass(cls, value, key: str):
-    """A dataclass with no default instance to start from: every field without a default is
-    required."""
-    require(isinstance(value, dict), key, value,
-            "must be a table of keys: " + ", ".join(init_fields(cls)))
-    fields = init_fields(cls)
-    missing = [name for name, field in fields.items()
-               if name not in value and _default_of(field) is dataclasses.MISSING]
-    require(not missing, _join(key, missing[0] if missing else ""), None,
-            "is required: give " + ", ".join(missing))
-    for name in value:
-        require(name in fields, _join(key, name), value[name],
-                f"unknown key; {key} takes " + ", ".join(fields))
-    return cls(**{name: convert(item, typing.get_type_hints(cls).get(name, typing.Any), None,
-                                _default_of(fields[name]), _join(key, name))
-                  for name, item in value.items()})
+            "must be an array of numbers, booleans or strings")
+    return value
 
 
 # --- writing a scene back out as TOML -----------------------------------------------------------
 
-def scene_to_toml(scene: Scene) -> str:
-    """The scene as a TOML scene file that ``load_scene`` reads back to the same scene."""
-    lines = []
-    for name, field in init_fields(Scene).items():
-        if name not in TYPED_LISTS:
-            lines.append(f"{name} = {toml_value(getattr(scene, name))}")
-    for list_name, (label, registry) in TYPED_LISTS.items():
+def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
+    """The scene as a TOML scene file that ``load_scene`` reads back to the same scene.
+
+    ``only_changes`` leaves out every key that has its default value (the name is always kept).
+    """
+    defaults = Scene() if only_changes else None
+    lines = [f"{name} = {toml_value(getattr(scene, name))}"
+             for name in init_fields(Scene) if name not in TYPED_LISTS
+             and (name == "name" or not _is_default(scene, defaults, name))]
+    for list_name, (_, registry) in TYPED_LISTS.items():
         for item in getattr(scene, list_name):
-            lines += ["", f"[[{list_name}]]", f"type = {toml_value(type_name(item, registry))}"]
-            lines += _table_lines(item, list_name)
+            kind = type_name(item, registry)
+            lines += ["", f"[[{list_name}]]", f"type = {toml_value(kind)}"]
+            lines += _table_lines(item, list_name, registry[kind]() if only_changes else None)
     return "\n".join(lines) + "\n"
 
 
-def _table_lines(node, prefix: str) -> list[str]:
-    """Plain keys first, then a ``[prefix.name]`` sub-table per nested dataclass."""
-    values = {name: getattr(node, name) for name in init_fields(type(node))}
-    lines = [f"{name} = {toml_value(value)}" for name, value in values.items()
-             if not dataclasses.is_dataclass(value)]
-    for name, value in values.items():
+def _table_lines(node, prefix: str, defaults=None) -> list[str]:
+    """Plain keys first, then a ``[prefix.name]`` sub-table per dataclass field and a
+    ``[[prefix.name]]`` table per item of a list of dataclasses (TOML wants that order).
+    Keys equal to those of ``defaults`` (an instance, or None to keep every key) are left out."""
+    lines, tables = [], []
+    for name in init_fields(type(node)):
+        value, key = getattr(node, name), f"{prefix}.{name}"
+        if _is_default(node, defaults, name):
+            continue
         if dataclasses.is_dataclass(value):
-            lines += [f"[{prefix}.{name}]"] + _table_lines(value, f"{prefix}.{name}")
-    return lines
+            inner = _table_lines(value, key, getattr(defaults, name, None))
+            tables += [f"[{key}]"] + inner
+        elif _is_table_list(value):
+            for item in value:
+                item_defaults = _default_instance(type(item)) if defaults is not None else None
+                tables += [f"[[{key}]]"] + _table_lines(item, key, item_defaults)
+        else:
+            lines.append(f"{name} = {toml_value(value)}")
+    return lines + tables
+
+
+def _is_default(node, defaults, name: str) -> bool:
+    if defaults is None:
+        return False
+    value, default = getattr(node, name), getattr(defaults, name)
+    try:
+        return bool(value == default) and type(value) is type(default)
+    except ValueError:                      # arrays compare elementwise
+        return bool(np.array_equal(value, default))
+
+
+def _default_instance(cls):
+    """``cls()`` where every field has a default; None (keep every key) otherwise."""
+    try:
+        return cls()
+    except TypeError:
+        return None
 
 
 def toml_value(value) -> str:
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, numbers.Integral):
         return str(int(value))
@@ -306,8 +409,9 @@ def toml_value(value) -> str:
     if isinstance(value, np.ndarray):
         return toml_value(value.tolist())
     if dataclasses.is_dataclass(value):
-        return "{" + ", ".join(f"{name} = {toml_value(getattr(value, name))}"
-                               for name in init_fields(type(value))) + "}"
+        value = {name: getattr(value, name) for name in init_fields(type(value))}
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{name} = {toml_value(item)}" for name, item in value.items()) + "}"
     if isinstance(value, (tuple, list)):
         return "[" + ", ".join(toml_value(item) for item in value) + "]"
     raise SceneError("scene", value, "holds a value that a TOML file cannot say")
@@ -329,35 +433,20 @@ def init_fields(cls) -> dict:
 
 
 def describe(node, prefix: str) -> str:
+    """How an error names a table: ``bodies.0 (cube)``, ``bodies.0.structural``, ``the scene``."""
     for _, registry in TYPED_LISTS.values():
         for name, factory in registry.items():
             if factory is type(node):
-                return f"{prefix} ({name})" if prefix else name
-    return prefix or "a scene"
-
-
-def _list_index(items: list, text: str, list_key: str, full_key: str, value) -> int:
-    """The item ``text`` names in ``items``; the error names the whole override key."""
-    count = len(items)
-    if count == 0:
-        allowed = f"{list_key} is empty, so no index exists"
-    else:
-        indices = "0" if count == 1 else f"0 to {count - 1}"
-        allowed = f"{list_key} has {count} item{'s' * (count > 1)}, so the index must be {indices}"
-    require(text.isdigit() and int(text) < count, full_key, value, f"unknown key; {allowed}")
-    return int(text)
-
-
-def _is_typed_list(node, name: str) -> bool:
-    return isinstance(node, Scene) and name in TYPED_LISTS
+                return f"{prefix} ({name})"
+    return prefix or "the scene"
 
 
 def _default_of(field: dataclasses.Field):
-    if field.default is not dataclasses.MISSING:
+    if field.default is not MISSING:
         return field.default
-    if field.default_factory is not dataclasses.MISSING:
+    if field.default_factory is not MISSING:
         return field.default_factory()
-    return dataclasses.MISSING
+    return MISSING
 
 
 def _strip_optional(annotation):
@@ -367,6 +456,11 @@ def _strip_optional(annotation):
         if len(arguments) == 1:
             return arguments[0]
     return annotation
+
+
+def _is_table_list(value) -> bool:
+    return (isinstance(value, (tuple, list)) and len(value) > 0
+            and all(dataclasses.is_dataclass(item) for item in value))
 
 
 def _is_number(value) -> bool:

@@ -19,8 +19,8 @@ def summary_lines(recording) -> list[str]:
                   f"real-time factor {_rate(simulated, recording.step_seconds):.3g}"),
         ("final centre of mass",
          _vector(centre_of_mass(recording.mass, recording.positions[-1])) + " m"),
-        ("deepest penetration", f"{recording.penetration[deepest]:.3g} m "
-                                f"(at t = {recording.time[deepest]:.4g} s)"),
+        ("deepest penetration", _penetration(recording.penetration[deepest],
+                                             recording.time[deepest])),
         ("energy at the end", ", ".join(f"{name} {value:.6g} J"
                                         for name, value in final_energies.items())),
         ("total energy change", f"{total[-1] - total[0]:+.6g} J since t = {recording.time[0]:g} s"),
@@ -28,6 +28,12 @@ def summary_lines(recording) -> list[str]:
     heading = (f"{recording.scene}: {recording.integrator}, dt = {recording.dt:g} s, "
                f"{len(recording.mass)} particles, {len(recording.springs)} springs")
     return [heading] + [f"  {label:<22}{text}" for label, text in rows]
+
+
+def _penetration(depth: float, time: float) -> str:
+    if depth == 0:
+        return "0 m (no particle inside a terrain in any frame)"
+    return f"{depth:.3g} m (at t = {time:.4g} s)"
 
 
 def centre_of_mass(mass: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -29,7 +29,7 @@ def run(args) -> int:
 def report_lines(result: dict) -> list[str]:
     memory = result["peak_memory_mb"]
     rows = [
-        ("steps/s", f"{result['steps_per_second']:.4g}"),
+        ("steps/s", _figure(result["steps_per_second"])),
         ("ms per step", f"{result['ms_per_step']:.4g}"),
         ("real-time factor", f"{result['real_time_factor']:.3g} (simulated s per wall s)"),
         ("timed", f"{result['steps']} steps in {result['wall_seconds']:.3g} s"),
@@ -40,3 +40,8 @@ def report_lines(result: dict) -> list[str]:
     heading = (f"{result['scene']}: {result['integrator']}, dt = {result['dt']:g} s, "
                f"{result['particles']} particles, {result['springs']} springs")
     return [heading] + [f"  {label:<18}{text}" for label, text in rows]
+
+
+def _figure(value: float) -> str:
+    """Large rates as whole numbers (46163, not 4.616e+04), small ones to four digits."""
+    return f"{value:.0f}" if value >= 1000 else f"{value:.4g}"

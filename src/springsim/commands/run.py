@@ -1,6 +1,7 @@
 """`springsim run`: simulate a scene with a progress bar, print a summary, save the frames."""
 import os
 import re
+import sys
 
 NAME = "run"
 HELP = "simulate a scene and save its frames (positions, velocities, energies) as an NPZ file"
@@ -16,7 +17,9 @@ def add_arguments(parser) -> None:
                         help="the NPZ file to write (default: SCENE_NAME.npz here)")
     parser.add_argument("--plot", metavar="IMAGE",
                         help="also chart the energies over time (.png, .pdf or .svg)")
-    parser.add_argument("--video", metavar="PATH", help="also render the frames as a video")
+    parser.add_argument("--video", metavar="PATH",
+                        help="also render the frames as a video (.mp4, .gif, or a folder for "
+                             "PNG frames) with springsim.render")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar and no summary (errors are still shown)")
 
@@ -66,24 +69,33 @@ def run(args) -> int:
     if args.plot:
         plot_energy(recording, args.plot)
         written.append(args.plot)
+    if not args.quiet:
+        print("\n".join(summary_lines(recording)), flush=True)
     if args.video:
-        write_video_of(simulation, recording, args.video)
+        problem = write_video_of(simulation, recording, args.video)
+        if problem:
+            print(f"springsim run: wrote {', '.join(written)} but no video: {problem}",
+                  file=sys.stderr)
+            return 4
         written.append(args.video)
     if not args.quiet:
-        print("\n".join(summary_lines(recording)))
         print(f"  {'wrote':<22}{', '.join(written)}")
     return 0
 
 
-def write_video_of(simulation, recording, path) -> None:
-    from ..errors import SceneError
-
+def write_video_of(simulation, recording, path) -> str | None:
+    """Render the recorded frames with springsim.render; the reason when it cannot, else None."""
     try:
-        from ..render import write_video
+        from .. import render
     except ImportError as error:
-        raise SceneError("--video", path, f"needs springsim.render, which failed to load "
-                                          f"({error})") from None
-    write_video(simulation.model, recording.time, recording.positions, path, fps=recording.fps)
+        return f"springsim.render failed to load ({error})"
+    unavailable = getattr(render, "RenderUnavailable", ())   # no headless OpenGL here, say
+    try:
+        render.write_video(simulation.model, recording.time, recording.positions, path,
+                           fps=recording.fps)
+    except unavailable as error:
+        return str(error)
+    return None
 
 
 def default_output(scene_name: str) -> str:
@@ -93,8 +105,10 @@ def default_output(scene_name: str) -> str:
 
 
 def check_output_path(option: str, path: str) -> None:
+    """The folder a file goes to must exist (a video may also be a folder of PNG frames)."""
     from ..errors import require
 
     folder = os.path.dirname(os.path.abspath(path))
     require(os.path.isdir(folder), option, path, f"the folder {folder} does not exist")
-    require(not os.path.isdir(path), option, path, "is a folder; give a file name")
+    require(option == "--video" or not os.path.isdir(path), option, path,
+            "is a folder; give a file name")

@@ -10,6 +10,8 @@ def add_arguments(parser) -> None:
                         help="a built-in scene or a .toml file to print in full")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change one key of the printed scene (repeatable)")
+    parser.add_argument("--short", action="store_true",
+                        help="print only the keys that differ from their defaults")
 
 
 def run(args) -> int:
@@ -24,5 +26,5 @@ def run(args) -> int:
         for name, (_, description) in PRESETS.items():
             print(f"{name:<{width}}  {description}")
         return 0
-    print(scene_to_toml(load_scene(args.scene, args.set)), end="")
+    print(scene_to_toml(load_scene(args.scene, args.set), only_changes=args.short), end="")
     return 0

@@ -13,10 +13,11 @@ Contact, as in contact.py but at the level of a whole implicit step:
   would stay out of the terrain anyway (the terrain only cancels forces that push into it, as in
   contact.py), and otherwise just enough for it to end the step on the surface. The solve
   therefore never moves a particle into a terrain.
-- The terrain can push, not pull: after the solve, the normal reaction impulse
-  lambda_n = ((A dv - b) . n) of every contact is checked, and contacts where it is negative
-  (the springs pull the particle away harder than the constraint allows) are released and the
-  system solved again.
+- The terrain can push, not pull, and nothing may go through it: after each solve, contacts
+  whose normal reaction impulse lambda_n = ((A dv - b) . n) is negative (the springs pull the
+  particle away harder than the constraint allows) are released, free particles that the solved
+  velocities would carry into a terrain become contacts, and the system is solved again (an
+  active set; a few passes at most).
 - Coulomb friction then takes at most ``friction * lambda_n`` of tangential momentum: a particle
   whose sliding that can stop sticks (static friction), any other slides on with kinetic friction.
 - Restitution is left to the impact pass every integrator runs after its step
@@ -61,6 +62,38 @@ def find_constraints(model, x, v, h, kind, normal, terrain, normal_change):
                 terrain[i] = t
                 normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
                 normal_change[i] = max(0.0, -max(phi, 0.0) / h - v_n)
+
+
+@kernel
+def add_penetrating_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_change):
+    """Make a contact of every free particle that the velocity change dv + ddv just solved for
+    would carry into a terrain (phi + h v'_n < 0), with the normal velocity change it needs
+    (the same rule as find_constraints), and correct ddv to make it. Returns how many."""
+    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
+    radii = model.terrain_radius
+    added = 0
+    for i in range(x.shape[0]):
+        if kind[i] != FREE:
+            continue
+        for t in range(kinds.shape[0]):
+            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
+                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            dv_n = ((dv[i, 0] + ddv[i, 0]) * nx + (dv[i, 1] + ddv[i, 1]) * ny
+                    + (dv[i, 2] + ddv[i, 2]) * nz)
+            if phi + h * (v_n + dv_n) >= 0.0:
+                continue
+            kind[i] = CONTACT
+            terrain[i] = t
+            normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+            normal_change[i] = max(0.0, -max(phi, 0.0) / h - v_n)
+            correction = normal_change[i] - dv_n
+            ddv[i, 0] += correction * nx
+            ddv[i, 1] += correction * ny
+            ddv[i, 2] += correction * nz
+            added += 1
+            break
+    return added
 
 
 @kernel

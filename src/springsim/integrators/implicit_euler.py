@@ -17,15 +17,16 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.cg import filtered_cg
-from ..implicit.constraints import (CONTACT, apply_friction, find_constraints,
-                                    normal_reactions, release_pulling_contacts)
+from ..implicit.constraints import (CONTACT, add_penetrating_contacts, apply_friction,
+                                    find_constraints, normal_reactions,
+                                    release_pulling_contacts)
 from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
                                  particle_mass)
 from ..implicit.pattern import build_block_pattern
 from . import Integrator, register
 from ._steps import finish_step
 
-MAX_CONTACT_RELEASES = 3   # re-solves after freeing pulling contacts, per Newton iteration
+MAX_CONTACT_UPDATES = 4   # re-solves after changing the set of contacts, per Newton iteration
 
 
 @kernel
@@ -44,20 +45,26 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
 
 
 @kernel
-def solve_with_contacts(pattern, blocks, rhs, kind, normal, ddv, tolerance, max_iterations,
-                        reaction, r, s, c, q):
-    """Solve for ddv, freeing contacts the terrain would have to pull and solving again.
-    Leaves the terrain's normal impulses in ``reaction``; returns the CG iterations taken."""
+def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, terrain,
+                        normal_change, ddv, tolerance, max_iterations, reaction, r, s, c, q):
+    """Solve for ddv, updating the contacts between solves (constraints.py: free those the
+    terrain would have to pull, add particles the solution carries into a terrain). Leaves the
+    terrain's normal impulses in ``reaction``; returns the CG iterations taken."""
     iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                         max_iterations, 0.0, r, s, c, q)
-    for attempt in range(MAX_CONTACT_RELEASES + 1):
+    for attempt in range(MAX_CONTACT_UPDATES):
         block_multiply(pattern, blocks, ddv, q)
         normal_reactions(kind, normal, q, rhs, reaction)
-        if attempt == MAX_CONTACT_RELEASES or release_pulling_contacts(kind, reaction) == 0:
+        changed = release_pulling_contacts(kind, reaction)
+        changed += add_penetrating_contacts(model, x, v, dv, ddv, h, kind, normal, terrain,
+                                            normal_change)
+        if changed == 0:
             break
         more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                       max_iterations, reference, r, s, c, q)
         iterations += more
+    block_multiply(pattern, blocks, ddv, q)
+    normal_reactions(kind, normal, q, rhs, reaction)
     return iterations
 
 
@@ -80,7 +87,8 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
             change = normal_change[i] if newton == 0 and kind[i] == CONTACT else 0.0
             for k in range(3):
                 ddv[i, k] = change * normal[i, k]
-        iterations += solve_with_contacts(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+        iterations += solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal,
+                                          terrain, normal_change, ddv, tolerance,
                                           max_iterations, reaction, r, s, c, q)
         for i in range(x.shape[0]):
             for k in range(3):

@@ -5,13 +5,14 @@ of PNGs with no display and no GPU (polyscope's EGL backend on Mesa). polyscope 
 only when this package is.
 """
 from .backend import RenderUnavailable, capture, start_renderer
-from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_box, scene_box
+from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_points, scene_points
 from .drawing import DrawOptions, SceneDrawing
-from .movie import render_video, write_video
-from .recording import record, steps_per_frame
+from .movie import draw_frame, render_video, write_video
+from .frames import simulate_frames, steps_per_frame
 from .video import FrameWriter, output_format
 
-__all__ = ["write_video", "render_video", "DrawOptions", "SceneDrawing", "Camera",
-           "CAMERA_NAMES", "camera_path", "frame_box", "scene_box", "apply_camera",
+__all__ = ["write_video", "render_video", "draw_frame", "DrawOptions", "SceneDrawing",
+           "Camera",
+           "CAMERA_NAMES", "camera_path", "frame_points", "scene_points", "apply_camera",
            "start_renderer", "capture", "RenderUnavailable", "FrameWriter", "output_format",
-           "record", "steps_per_frame"]
+           "simulate_frames", "steps_per_frame"]

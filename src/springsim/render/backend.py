@@ -3,8 +3,11 @@
 polyscope can be initialised only once in a process, so every caller goes through
 ``start_renderer``: the first call decides window or headless, later calls only resize.
 """
+import os
+
 import numpy as np
 import polyscope as ps
+import polyscope.imgui as psim
 
 from .colors import BACKGROUND_COLOR
 
@@ -24,6 +27,7 @@ def start_renderer(*, headless: bool, width: int, height: int) -> str:
     ps.set_program_name("springsim")
     ps.set_use_prefs_file(False)          # polyscope would otherwise write .polyscope.ini here
     ps.set_errors_throw_exceptions(True)
+    ps.set_verbosity(0)                   # errors still raise; progress talk is not wanted
     ps.set_window_size(int(width), int(height))
     try:
         if headless:
@@ -33,6 +37,7 @@ def start_renderer(*, headless: bool, width: int, height: int) -> str:
             ps.init()
     except RuntimeError as error:
         raise RenderUnavailable(_advice(headless, error)) from error
+    psim.GetIO().IniFilename = os.devnull   # ImGui would write imgui.ini into the current folder
     _configure_scene()
     return ps.get_render_engine_backend_name()
 

@@ -1,8 +1,8 @@
 """Cameras that frame a scene: the bodies plus the part of the terrains near them.
 
 Directions are given as azimuth (degrees from +z towards +x) and elevation (degrees above the
-horizontal plane, y up). A camera looks at the centre of a box from far enough that every corner
-of the box lies inside the picture, with a small margin.
+horizontal plane, y up). A camera looks at the middle of a cloud of points (the bodies and the
+terrain near them) from just far enough that every point lies inside the picture.
 """
 import math
 from dataclasses import dataclass
@@ -50,62 +50,80 @@ def view_direction(azimuth: float, elevation: float) -> np.ndarray:
     return np.array([math.sin(a) * math.cos(e), math.sin(e), math.cos(a) * math.cos(e)])
 
 
-def frame_box(low, high, azimuth: float, elevation: float, aspect: float,
-              fov_degrees: float = FOV_DEGREES) -> Camera:
-    """The camera looking at the box's centre from (azimuth, elevation), just far enough away.
+def frame_points(points, azimuth: float, elevation: float, aspect: float,
+                 fov_degrees: float = FOV_DEGREES) -> Camera:
+    """The camera that sees every point from (azimuth, elevation), as close as it can.
 
-    A corner at offset p from the centre appears at (p.right, p.up) over a depth of D - p.d,
-    with d the unit vector towards the eye; it fits when |p.right| <= (D - p.d) tan(half width
-    angle), and likewise upwards, which gives the least distance D for every corner.
+    It looks at the middle of the points' extent across the view; a point at offset p from
+    there appears at (p.right, p.up) over a depth of D - p.d, with d the unit vector towards the
+    eye, and fits when |p.right| <= (D - p.d) tan(half width angle), and likewise upwards: the
+    least distance D that fits every point follows.
     """
-    low, high = np.asarray(low, float), np.asarray(high, float)
-    center = (low + high) / 2
+    points = np.asarray(points, float).reshape(-1, 3)
     toward_eye = view_direction(azimuth, elevation)
-    camera = Camera(eye=center + toward_eye, target=center, fov_degrees=fov_degrees)
-    right, up, _ = camera.basis()
+    right, up, _ = Camera(eye=toward_eye, target=np.zeros(3)).basis()
+    axes = np.stack([right, up, toward_eye])
+    local = points @ axes.T
+    center = ((local.min(axis=0) + local.max(axis=0)) / 2) @ axes
+    offsets = points - center
+    along = offsets @ toward_eye
     tan_vertical = math.tan(math.radians(fov_degrees) / 2)
     tan_horizontal = tan_vertical * aspect
-    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
-                        for z in (low[2], high[2])]) - center
-    along = corners @ toward_eye
-    distance = max(np.max(np.abs(corners @ right) / tan_horizontal + along),
-                   np.max(np.abs(corners @ up) / tan_vertical + along))
+    distance = max(np.max(np.abs(offsets @ right) / tan_horizontal + along),
+                   np.max(np.abs(offsets @ up) / tan_vertical + along))
     distance = MARGIN * max(distance, 1e-3)
     return Camera(eye=center + distance * toward_eye, target=center, fov_degrees=fov_degrees)
 
 
-def body_box(model, positions) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding box (m) of every particle, balls with their radius, over one or many frames."""
+def body_points(model, positions, most: int = 20_000) -> np.ndarray:
+    """Particles of one frame (P, 3) or many (F, P, 3), thinned to about ``most`` points; a ball
+    adds the six points where its surface meets the axes through its centre."""
     x = np.asarray(positions, float).reshape(-1, model.particle_count, 3)
-    radius = model.arrays.radius[None, :, None]
-    return np.min(x - radius, axis=(0, 1)), np.max(x + radius, axis=(0, 1))
+    radius = model.arrays.radius
+    balls = np.flatnonzero(radius > 0)
+    stride = max(1, x.shape[0] * x.shape[1] // most)
+    points = [x.reshape(-1, 3)[::stride]]
+    for axis in np.concatenate([np.eye(3), -np.eye(3)]):
+        points.append((x[:, balls] + radius[balls, None] * axis).reshape(-1, 3))
+    return np.concatenate(points)
 
 
-def scene_box(model, positions) -> tuple[np.ndarray, np.ndarray]:
-    """The bodies' box grown by the parts of the terrains near them (never a whole plane)."""
-    low, high = body_box(model, positions)
+def scene_points(model, positions) -> np.ndarray:
+    """The bodies' points and the parts of the terrains near them (never a whole plane)."""
+    bodies = body_points(model, positions)
+    low, high = bodies.min(axis=0), bodies.max(axis=0)
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
                         for z in (low[2], high[2])])
     size = float(np.linalg.norm(high - low))
-    points = [corners]
-    for terrain in model.terrains:
-        points.append(_terrain_points_near(terrain, corners, size))
-    points = np.concatenate(points)
-    return points.min(axis=0), points.max(axis=0)
+    near = [terrain_points_near(terrain, corners, size) for terrain in model.terrains]
+    return np.concatenate([bodies, *near])
 
 
-def _terrain_points_near(terrain, corners: np.ndarray, size: float) -> np.ndarray:
+def terrain_points_near(terrain, corners: np.ndarray, size: float) -> np.ndarray:
+    """Points of a terrain under the box with these corners (and ``size``, its diagonal)."""
     if isinstance(terrain, Plane):
         n = terrain.unit_normal()
         return corners - np.outer(terrain.signed_distance(corners), n)
     center, radius = np.asarray(terrain.center, float), float(terrain.radius)
-    if radius <= 2 * size:                     # small enough to show whole
-        rim = np.array([radius, 0.0 if isinstance(terrain, Bowl) else radius, radius])
-        return np.stack([center - radius, center + rim])
-    if isinstance(terrain, Sphere):            # too big: the patch under the bodies
+    if radius > 2 * size:                      # too big to show whole: the part under the box
         offsets = corners - center
         return center + radius * offsets / np.linalg.norm(offsets, axis=1, keepdims=True)
-    return corners
+    directions = _sphere_directions()
+    if isinstance(terrain, Bowl):              # drawn up to its centre's height
+        directions = directions[directions[:, 1] <= 0]
+    return center + radius * directions
+
+
+def _sphere_directions(count: int = 400) -> np.ndarray:
+    """Nearly even unit vectors (a Fibonacci sphere), with the equator itself."""
+    k = np.arange(count) + 0.5
+    y = 1 - 2 * k / count
+    phi = math.pi * (3 - math.sqrt(5)) * k
+    ring = np.sqrt(1 - y * y)
+    spiral = np.stack([ring * np.cos(phi), y, ring * np.sin(phi)], axis=1)
+    angles = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+    equator = np.stack([np.cos(angles), np.zeros_like(angles), np.sin(angles)], axis=1)
+    return np.concatenate([spiral, equator])
 
 
 def camera_path(name: str, model, positions, aspect: float) -> list:
@@ -117,9 +135,9 @@ def camera_path(name: str, model, positions, aspect: float) -> list:
     require(name in CAMERA_NAMES, "camera", name, "must be one of " + ", ".join(CAMERA_NAMES))
     positions = np.asarray(positions)
     if name != "follow":
-        camera = frame_box(*scene_box(model, positions), *VIEWS[name], aspect)
+        camera = frame_points(scene_points(model, positions), *VIEWS[name], aspect)
         return [camera] * len(positions)
-    first = frame_box(*scene_box(model, positions[0]), *VIEWS["auto"], aspect)
+    first = frame_points(scene_points(model, positions[0]), *VIEWS["auto"], aspect)
     centres = positions.mean(axis=1)
     shifts = centres - centres[0]
     return [Camera(eye=first.eye + s, target=first.target + s) for s in shifts]

@@ -8,7 +8,7 @@ SPRING_COLORS = {
     SpringKind.FACE: (0.75, 0.35, 0.9),        # violet: the long face-to-face springs
 }
 BODY_COLORS = ((0.95, 0.55, 0.2), (0.25, 0.55, 0.95), (0.9, 0.35, 0.55), (0.55, 0.8, 0.3))
-CLOTH_BACK_COLOR = (0.95, 0.9, 0.75)          # the underside of an open surface
+CLOTH_BACK_COLOR = (0.35, 0.6, 0.85)        # the underside of an open surface (cloth)
 PARTICLE_COLOR = (0.15, 0.15, 0.2)
 BALL_COLOR = (0.6, 0.62, 0.7)
 TERRAIN_COLOR = (0.72, 0.74, 0.7)

@@ -173,7 +173,7 @@ class _PlanePatch:
         high = positions.max(axis=0)
         extent = float(np.max(high - low))
         self.cell = float(10.0 ** np.round(np.log10(max(extent, 1e-3) / 4)))
-        self.half_size = max(25.0 * self.cell, 6.0 * extent)
+        self.half_size = max(40.0 * self.cell, 10.0 * extent)
         self.part = None
         self._build(positions.mean(axis=0))
 

@@ -1,4 +1,4 @@
-"""Simulating a scene frame by frame and keeping the positions to render afterwards."""
+"""Simulating a scene for a video: one frame every ``round(1 / (fps dt))`` steps."""
 import numpy as np
 from tqdm import tqdm
 
@@ -12,9 +12,9 @@ def steps_per_frame(dt: float, fps: float) -> int:
     return steps
 
 
-def record(sim, duration: float, fps: float, progress: bool = True):
-    """Positions (F, P, 3) and times (F,) of ``round(duration * fps)`` frames, the first one
-    being the current state, each next one ``steps_per_frame`` steps later."""
+def simulate_frames(sim, duration: float, fps: float, progress: bool = True):
+    """Times (F,) and positions (F, P, 3) of ``round(duration * fps)`` frames: the current
+    state, then one frame every ``steps_per_frame(dt, fps)`` steps."""
     require(duration > 0, "duration", duration, "must be > 0 s")
     count = max(1, int(round(duration * fps)))
     steps = steps_per_frame(sim.dt, fps)
