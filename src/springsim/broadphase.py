@@ -124,31 +124,19 @@ def build_grid(x, members, cell_size):
     Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``; its particles are
     ``members[cell_start[c]:cell_start[c + 1]]`` (ascending), with their positions alongside so
     that a search reads memory in order. Consecutive z cells are consecutive in memory, so a
-    search reads a whole run of z cells at once. Non-finite positions are left out of the
-    bounding box and land in a border cell, where no distance test passes.
+    search reads a whole run of z cells at once.
     """
     count = members.shape[0]
     origin, extent = bounding_box(x, members)
-    if not cell_size > 0.0:
-        cell_size = 1.0
-    while True:
-        cells = 1.0
-        for c in range(3):
-            cells *= math.floor(extent[c] / cell_size) + 1.0
-        if cells <= MAX_CELLS_PER_PARTICLE * count + 64:
-            break
-        cell_size *= 2.0
+    cell_size = grid_cell_size(extent, cell_size, MAX_CELLS_PER_PARTICLE * count + 64)
     dims = np.empty(3, np.int64)
     for c in range(3):
-        dims[c] = int(math.floor(extent[c] / cell_size)) + 1
+        dims[c] = int(extent[c] / cell_size) + 1
     cell_of = np.empty(count, np.int64)
     cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
     for k in range(count):
         i = members[k]
-        ix = cell_coordinate(x[i, 0], origin[0], cell_size, dims[0])
-        iy = cell_coordinate(x[i, 1], origin[1], cell_size, dims[1])
-        iz = cell_coordinate(x[i, 2], origin[2], cell_size, dims[2])
-        cell_of[k] = (ix * dims[1] + iy) * dims[2] + iz
+        cell_of[k] = cell_number(x[i, 0], x[i, 1], x[i, 2], origin, cell_size, dims)
         cell_start[cell_of[k] + 1] += 1
     for cell in range(1, cell_start.shape[0]):
         cell_start[cell] += cell_start[cell - 1]
@@ -166,19 +154,53 @@ def build_grid(x, members, cell_size):
 
 @kernel
 def bounding_box(x, members):
-    """Lowest corner and size (m) of the box around the members' finite positions."""
-    low = np.full(3, np.inf)
-    high = np.full(3, -np.inf)
+    """Lowest corner and size (m) of the box around the members' positions.
+
+    NaN positions are left out (every comparison with NaN is false). If a position is infinite
+    the box is too: then the box collapses to a point and the grid to one cell, which stays exact
+    (every member is tested) for the one step before the divergence check stops the simulation.
+    """
+    x_low = y_low = z_low = np.inf
+    x_high = y_high = z_high = -np.inf
     for i in members:
-        for c in range(3):
-            value = x[i, c]
-            if np.abs(value) < np.inf:  # false for NaN and infinities
-                low[c] = min(low[c], value)
-                high[c] = max(high[c], value)
+        if x[i, 0] < x_low:
+            x_low = x[i, 0]
+        if x[i, 0] > x_high:
+            x_high = x[i, 0]
+        if x[i, 1] < y_low:
+            y_low = x[i, 1]
+        if x[i, 1] > y_high:
+            y_high = x[i, 1]
+        if x[i, 2] < z_low:
+            z_low = x[i, 2]
+        if x[i, 2] > z_high:
+            z_high = x[i, 2]
+    origin = np.array([x_low, y_low, z_low])
+    extent = np.array([x_high - x_low, y_high - y_low, z_high - z_low])
     for c in range(3):
-        if not low[c] <= high[c]:  # no finite position at all
-            low[c] = high[c] = 0.0
-    return low, high - low
+        if not (np.abs(origin[c]) < np.inf and extent[c] < np.inf):
+            origin[c] = extent[c] = 0.0
+    return origin, extent
+
+
+@kernel
+def grid_cell_size(extent, cell_size, max_cells):
+    """``cell_size``, doubled until the box of size ``extent`` has at most ``max_cells`` cells
+    (a particle far away would otherwise make the grid, and its memory, huge)."""
+    if not cell_size > 0.0:
+        cell_size = 1.0
+    while ((extent[0] / cell_size + 1.0) * (extent[1] / cell_size + 1.0)
+           * (extent[2] / cell_size + 1.0) > max_cells):
+        cell_size *= 2.0
+    return cell_size
+
+
+@kernel
+def cell_number(x0, x1, x2, origin, cell_size, dims):
+    ix = cell_coordinate(x0, origin[0], cell_size, dims[0])
+    iy = cell_coordinate(x1, origin[1], cell_size, dims[1])
+    iz = cell_coordinate(x2, origin[2], cell_size, dims[2])
+    return (ix * dims[1] + iy) * dims[2] + iz
 
 
 @kernel

@@ -11,11 +11,21 @@ How contact enters an integrator, and why:
    it slides with kinetic friction along -v_T. The formula never divides by |v_T|, so a particle at
    rest is no special case. Because the reaction is a force, every stage sees it and the method
    keeps its order away from impacts.
+   A particle in the band that already moves away from the surface (v_N > 0) keeps the part of the
+   push that stops it within the step: the reaction is -a_N - v_N / h, or none when that is
+   negative (it leaves fast, or is pulled away). Cancelling the whole push instead would let it
+   coast outwards at constant speed to the edge of the band, fall back in, bounce, and repeat: an
+   endless chatter fed by a reaction doing positive work, with friction lost on every excursion
+   (a cube on a slope crept and toppled that way).
 2. After the whole step, an impact pass: a particle within the band that still approaches the
    surface has its normal velocity reflected with restitution (v' = -e v_N + v_T), and a particle
    that ended the step inside the surface is moved back onto it. A step of any size therefore ends
    with no penetration, whatever the integrator did in between; doing this once per step (not per
    stage) keeps stages smooth functions of the state, which is what their order relies on.
+   An approach slower than sqrt(2 |g| epsilon) is resting contact, not an impact: its rebound
+   would not even lift the particle out of the contact band, so it is below what the band
+   resolves, and reflecting it would keep a resting body vibrating forever. Such approaches are
+   stopped (restitution 0).
 """
 import math
 
@@ -63,8 +73,8 @@ def apply_contact_forces(model, x, v, h, a):
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             # The reaction cancels the push into the surface; a particle already moving away
-            # keeps only the part of the push that stops it within this step (see module doc).
-            reaction = -a_n - (max(v_n, 0.0) + max(phi, 0.0) / h) / h
+            # keeps the part of the push that stops it within this step (see module doc).
+            reaction = -a_n - max(v_n, 0.0) / h
             if reaction <= 0.0:
                 continue  # pulled away from the surface, or leaving fast: no reaction, no friction
             # tangential acceleration and tangential (sliding) velocity
@@ -75,7 +85,7 @@ def apply_contact_forces(model, x, v, h, a):
             size = math.sqrt(sx * sx + sy * sy + sz * sz)
             limit = friction[t] * reaction
             scale = 1.0 if size <= limit else limit / size
-            a_normal = a_n + reaction
+            a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
             a[i, 0] = ax + scale * sx + a_normal * nx
             a[i, 1] = ay + scale * sy + a_normal * ny
             a[i, 2] = az + scale * sz + a_normal * nz
@@ -88,7 +98,8 @@ def resolve_terrain_impacts(model, x, v):
     radii, epsilon, restitution = (model.terrain_radius, model.terrain_epsilon,
                                    model.terrain_restitution)
     g = model.gravity
-    resting_speed = np.sqrt(2.0 * np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) * epsilon)
+    # below this approach speed a rebound would stay inside the band: resting contact (module doc)
+    resting_speed = np.sqrt(2.0 * math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) * epsilon)
     for i in range(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
@@ -99,7 +110,7 @@ def resolve_terrain_impacts(model, x, v):
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             if v_n < 0.0:
-                e = restitution[t]
+                e = restitution[t] if v_n < -resting_speed[t] else 0.0
                 bounce = (1.0 + e) * v_n
                 v[i, 0] -= bounce * nx
                 v[i, 1] -= bounce * ny

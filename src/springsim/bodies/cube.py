@@ -47,6 +47,12 @@ class Cube:
                 "needs an integer >= 2 (structural and shear springs join neighbours)")
         require(n >= 3 or not _builds(self.bend), f"{key}.particles_per_edge", n,
                 "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
+        # a face spring joins particle 0 to N-1: for N = 2 that is a structural spring, for
+        # N = 3 a bend spring, and the same pair would be joined twice
+        require(n >= 4 or not (self.face_springs and _builds(self.face)),
+                f"{key}.particles_per_edge", n,
+                "needs >= 4 for face springs (below that they duplicate structural or bend "
+                "springs; or set face_springs = false)")
         require(self.edge_length > 0, f"{key}.edge_length", self.edge_length, "must be > 0 m")
         require(self.particle_mass > 0, f"{key}.particle_mass", self.particle_mass,
                 "must be > 0 kg")

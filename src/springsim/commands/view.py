@@ -39,7 +39,12 @@ def run(args) -> int:
         controls.start()
     print(f"springsim view: {controls.scene_name} in a {args.width} x {args.height} window "
           f"({viewer.backend})", flush=True)
-    viewer.run(args.frames)
+    try:
+        viewer.run(args.frames)
+    finally:
+        recorded = viewer.close()
+        if recorded is not None:
+            print(f"wrote {recorded}")
     if args.screenshot:
         save_screenshot(args.screenshot)
         print(f"wrote {args.screenshot}")

@@ -1,25 +1,31 @@
 """Pinned particles and terrain contact as constraints on the velocity change of a step.
 
 Baraff and Witkin (1998, section 5) enforce constraints inside the linear solve: a filter
-S_i = I (free), I - n n^T (contact, normal n) or 0 (pinned) removes the constrained components
-from every conjugate-gradient direction, so the solve keeps them at the value they start with.
+S_i = I (free), I - n n^T (normal fixed) or 0 (all fixed) removes the constrained components from
+every conjugate-gradient direction, so the solve keeps them at the values it starts from.
 
-Contact, as in contact.py but at the level of a whole implicit step:
+Contact, as contact.py does it but for a whole implicit step:
 - A particle is in contact with a terrain when it is in the contact band (phi < epsilon) or will
   be by the end of the step at its current velocity (phi + h v_n < epsilon). The second case is
   what keeps large steps honest: a particle falling 0.4 m per step would otherwise be driven deep
   into the terrain by the solve and then lifted out alone, crushing the lattice above it.
-- Its normal velocity change is fixed at dv_n = max(0, -phi/h - v_n): zero when the particle
-  would stay out of the terrain anyway (the terrain only cancels forces that push into it, as in
-  contact.py), and otherwise just enough for it to end the step on the surface. The solve
-  therefore never moves a particle into a terrain.
-- The terrain can push, not pull, and nothing may go through it: after each solve, contacts
-  whose normal reaction impulse lambda_n = ((A dv - b) . n) is negative (the springs pull the
-  particle away harder than the constraint allows) are released, free particles that the solved
-  velocities would carry into a terrain become contacts, and the system is solved again (an
-  active set; a few passes at most).
-- Coulomb friction then takes at most ``friction * lambda_n`` of tangential momentum: a particle
-  whose sliding that can stop sticks (static friction), any other slides on with kinetic friction.
+- A contact's normal velocity at the end of the step is held at a floor v'_n = bound:
+  outside the band, bound = -phi/h: it may end the step on the surface, not beyond;
+  in the band, bound = max(min(v_n, 0), -phi/h): the terrain cancels the forces that would push
+  the particle in (as contact.py does), stops it at the surface, and lets a leaving particle slow
+  down but not turn back into the terrain. The solve therefore never moves a particle into a
+  terrain.
+- Coulomb friction is part of the solve, so that the springs feel it in the same step (applied
+  afterwards, it would hold a contact still while the springs carry the rest of the body on, and
+  fold the lattice at the first impact of a large step). A contact is STUCK (tangential velocity
+  held at zero as well) or SLIDING (a kinetic friction impulse friction * lambda_n against its
+  tangential velocity enters the right-hand side).
+- After each solve the contacts are updated from their reaction impulses R = A dv - b, and the
+  system solved again (an active set, a few passes at most): a contact whose normal impulse
+  lambda_n = R . n is negative is released (the terrain can push, not pull); a stuck contact whose
+  tangential impulse leaves the cone |R_T| <= friction * lambda_n starts to slide; a sliding one
+  whose friction has reversed its motion sticks; a free particle that the solved velocities carry
+  into a terrain becomes a contact.
 - Restitution is left to the impact pass every integrator runs after its step
   (``_steps.finish_step``), which reflects whatever normal velocity still approaches a terrain.
 One terrain per particle: the one it reaches first. A particle touching two terrains at once has
@@ -32,77 +38,96 @@ import numpy as np
 from .._jit import kernel
 from ..contact import terrain_distance
 
-FREE, CONTACT, PINNED = 0, 1, 2
+FREE, SLIDING, STUCK, PINNED = 0, 1, 2, 3
+STICKING_TOLERANCE = 1e-9  # relative slack of the friction cone, against round-off flip-flops
 
 
 @kernel
-def find_constraints(model, x, v, h, kind, normal, terrain, normal_change):
-    """Classify every particle (FREE, CONTACT, PINNED); for contacts set the terrain, its normal
-    and the normal velocity change the step must make (see module doc)."""
+def lowest_normal_velocity(phi, v_n, h, epsilon):
+    """The floor a contact's normal velocity is held at by the end of the step (module doc)."""
+    if phi >= epsilon:
+        return -phi / h
+    return max(min(v_n, 0.0), -max(phi, 0.0) / h)
+
+
+@kernel
+def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
+    """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
+    normal and the normal velocity; terrain -1 if it reaches none.
+
+    With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
+    start of a step); without, it means ending the step inside (phi + h u_n < 0).
+    """
     kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
     radii, epsilon = model.terrain_radius, model.terrain_epsilon
+    best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
+    nx = ny = nz = 0.0
+    for t in range(kinds.shape[0]):
+        phi, mx, my, mz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
+                                           x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+        u_n = u0 * mx + u1 * my + u2 * mz
+        reached = phi + h * u_n   # distance at the end of the step
+        if in_reach:
+            touching = phi < epsilon[t] or reached < epsilon[t]
+        else:
+            touching = reached < 0.0
+        if touching and reached < earliest:
+            best, best_phi, best_u_n, earliest = t, phi, u_n, reached
+            nx, ny, nz = mx, my, mz
+    return best, best_phi, nx, ny, nz, best_u_n
+
+
+@kernel
+def find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction):
+    """Classify every particle at the start of a step: PINNED, FREE, or a STUCK contact (the
+    first solve tells which contacts slide). Sets each contact's terrain, normal and floor."""
     for i in range(x.shape[0]):
         kind[i] = FREE
         terrain[i] = -1
-        normal_change[i] = 0.0
+        friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
         if model.inv_mass[i] == 0.0:
             kind[i] = PINNED
             continue
-        earliest = np.inf
-        for t in range(kinds.shape[0]):
-            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
-                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
-            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-            reached = phi + h * v_n   # distance at the end of the step, at the current velocity
-            if phi >= epsilon[t] and reached >= epsilon[t]:
-                continue
-            if reached < earliest:
-                earliest = reached
-                kind[i] = CONTACT
-                terrain[i] = t
-                normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-                normal_change[i] = max(0.0, -max(phi, 0.0) / h - v_n)
+        t, phi, nx, ny, nz, v_n = closest_terrain(model, x, i, v[i, 0], v[i, 1], v[i, 2], h,
+                                                  True)
+        if t >= 0:
+            kind[i] = STUCK
+            terrain[i] = t
+            normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+            normal_floor[i] = lowest_normal_velocity(phi, v_n, h, model.terrain_epsilon[t])
 
 
 @kernel
-def add_penetrating_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_change):
-    """Make a contact of every free particle that the velocity change dv + ddv just solved for
-    would carry into a terrain (phi + h v'_n < 0), with the normal velocity change it needs
-    (the same rule as find_constraints), and correct ddv to make it. Returns how many."""
-    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
-    radii = model.terrain_radius
-    added = 0
-    for i in range(x.shape[0]):
-        if kind[i] != FREE:
-            continue
-        for t in range(kinds.shape[0]):
-            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
-                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
-            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-            dv_n = ((dv[i, 0] + ddv[i, 0]) * nx + (dv[i, 1] + ddv[i, 1]) * ny
-                    + (dv[i, 2] + ddv[i, 2]) * nz)
-            if phi + h * (v_n + dv_n) >= 0.0:
-                continue
-            kind[i] = CONTACT
-            terrain[i] = t
-            normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-            normal_change[i] = max(0.0, -max(phi, 0.0) / h - v_n)
-            correction = normal_change[i] - dv_n
-            ddv[i, 0] += correction * nx
-            ddv[i, 1] += correction * ny
-            ddv[i, 2] += correction * nz
-            added += 1
-            break
-    return added
+def hold_constrained(i, kind, normal, normal_floor, v, dv, ddv):
+    """Set the components of ddv that particle i's constraint fixes, so that v + dv + ddv
+    meets it: all three at rest for PINNED (v = 0), on the floor with no tangential velocity
+    for STUCK, on the floor for SLIDING. Free components are left as they are."""
+    if kind[i] == FREE:
+        return
+    if kind[i] == PINNED:
+        ddv[i, 0] = ddv[i, 1] = ddv[i, 2] = 0.0
+        return
+    nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
+    if kind[i] == STUCK:
+        ddv[i, 0] = normal_floor[i] * nx - u0
+        ddv[i, 1] = normal_floor[i] * ny - u1
+        ddv[i, 2] = normal_floor[i] * nz - u2
+        return
+    gap = normal_floor[i] - (u0 + ddv[i, 0]) * nx - (u1 + ddv[i, 1]) * ny - (u2 + ddv[i, 2]) * nz
+    ddv[i, 0] += gap * nx
+    ddv[i, 1] += gap * ny
+    ddv[i, 2] += gap * nz
 
 
 @kernel
 def filter_constrained(kind, normal, u):
-    """u = S u: remove the normal component at contacts and everything at pinned particles."""
+    """u = S u: remove the normal component of sliding contacts, everything of stuck or pinned
+    particles."""
     for i in range(u.shape[0]):
         if kind[i] == FREE:
             continue
-        if kind[i] == PINNED:
+        if kind[i] != SLIDING:
             u[i, 0] = u[i, 1] = u[i, 2] = 0.0
             continue
         u_n = u[i, 0] * normal[i, 0] + u[i, 1] * normal[i, 1] + u[i, 2] * normal[i, 2]
@@ -111,41 +136,63 @@ def filter_constrained(kind, normal, u):
 
 
 @kernel
-def normal_reactions(kind, normal, product, rhs, reaction):
-    """reaction_i = ((A dv - b)_i . n_i): the terrain's normal impulse (N s) on every contact,
-    given ``product`` = A dv; zero for the rest."""
-    for i in range(rhs.shape[0]):
-        reaction[i] = 0.0
-        if kind[i] == CONTACT:
-            reaction[i] = ((product[i, 0] - rhs[i, 0]) * normal[i, 0]
-                           + (product[i, 1] - rhs[i, 1]) * normal[i, 1]
-                           + (product[i, 2] - rhs[i, 2]) * normal[i, 2])
-
-
-@kernel
-def release_pulling_contacts(kind, reaction):
-    """Free the contacts whose terrain would have to pull; return how many there were."""
-    released = 0
-    for i in range(kind.shape[0]):
-        if kind[i] == CONTACT and reaction[i] < 0.0:
-            kind[i] = FREE
-            released += 1
-    return released
-
-
-@kernel
-def apply_friction(model, kind, normal, terrain, reaction, v):
-    """Coulomb friction on the new velocities: remove at most friction * lambda_n / m of each
-    contact's tangential velocity (all of it when that suffices: the particle sticks)."""
-    for i in range(v.shape[0]):
-        if kind[i] != CONTACT or not reaction[i] > 0.0:
+def update_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_floor, friction,
+                    reaction):
+    """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
+    solve. Adjusts ddv to every changed constraint; returns how many changed."""
+    changed = 0
+    for i in range(x.shape[0]):
+        if kind[i] == PINNED:
+            continue
+        if kind[i] == FREE:
+            t, phi, nx, ny, nz, _ = closest_terrain(model, x, i, v[i, 0] + dv[i, 0] + ddv[i, 0],
+                                                    v[i, 1] + dv[i, 1] + ddv[i, 1],
+                                                    v[i, 2] + dv[i, 2] + ddv[i, 2], h, False)
+            if t >= 0:
+                kind[i] = STUCK
+                terrain[i] = t
+                normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+                v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+                normal_floor[i] = lowest_normal_velocity(phi, v_n, h,
+                                                         model.terrain_epsilon[t])
+                hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
+                changed += 1
             continue
         nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-        v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-        tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
-        sliding = math.sqrt(tx * tx + ty * ty + tz * tz)
-        stoppable = model.terrain_friction[terrain[i]] * reaction[i] * model.inv_mass[i]
-        keep = 0.0 if sliding <= stoppable else 1.0 - stoppable / sliding
-        v[i, 0] = v_n * nx + keep * tx
-        v[i, 1] = v_n * ny + keep * ty
-        v[i, 2] = v_n * nz + keep * tz
+        r_n = reaction[i, 0] * nx + reaction[i, 1] * ny + reaction[i, 2] * nz
+        if r_n < 0.0:
+            kind[i] = FREE   # the terrain would have to pull
+            friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
+            changed += 1
+            continue
+        limit = model.terrain_friction[terrain[i]] * r_n
+        if kind[i] == STUCK:
+            tx, ty, tz = reaction[i, 0] - r_n * nx, reaction[i, 1] - r_n * ny, reaction[i, 2] - r_n * nz
+            holding = math.sqrt(tx * tx + ty * ty + tz * tz)
+            if holding > limit * (1.0 + STICKING_TOLERANCE):
+                kind[i] = SLIDING   # friction at the edge of the cone, the way it pulled
+                scale = limit / holding
+                friction[i, 0], friction[i, 1], friction[i, 2] = scale * tx, scale * ty, scale * tz
+                changed += 1
+            continue
+        # sliding: kinetic friction against the tangential velocity just solved for
+        u0, u1, u2 = v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1], \
+            v[i, 2] + dv[i, 2] + ddv[i, 2]
+        u_n = u0 * nx + u1 * ny + u2 * nz
+        tx, ty, tz = u0 - u_n * nx, u1 - u_n * ny, u2 - u_n * nz
+        if tx * friction[i, 0] + ty * friction[i, 1] + tz * friction[i, 2] > 0.0:
+            kind[i] = STUCK   # friction turned the motion around: it would have stopped
+            friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
+            hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
+            changed += 1
+            continue
+        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
+        if speed == 0.0:
+            continue
+        fx, fy, fz = -limit * tx / speed, -limit * ty / speed, -limit * tz / speed
+        shift = math.sqrt((fx - friction[i, 0]) ** 2 + (fy - friction[i, 1]) ** 2
+                          + (fz - friction[i, 2]) ** 2)
+        if shift > 1e-3 * limit:
+            changed += 1
+        friction[i, 0], friction[i, 1], friction[i, 2] = fx, fy, fz
+    return changed

@@ -17,14 +17,12 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.cg import filtered_cg
-from ..implicit.constraints import (CONTACT, add_penetrating_contacts, apply_friction,
-                                    find_constraints, normal_reactions,
-                                    release_pulling_contacts)
+from ..implicit.constraints import find_constraints, hold_constrained, update_contacts
 from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
                                  particle_mass)
 from ..implicit.pattern import build_block_pattern
 from . import Integrator, register
-from ._steps import finish_step
+from ._steps import add_scaled, finish_step
 
 MAX_CONTACT_UPDATES = 4   # re-solves after changing the set of contacts, per Newton iteration
 
@@ -46,34 +44,32 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
 
 @kernel
 def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, terrain,
-                        normal_change, ddv, tolerance, max_iterations, reaction, r, s, c, q):
-    """Solve for ddv, updating the contacts between solves (constraints.py: free those the
-    terrain would have to pull, add particles the solution carries into a terrain). Leaves the
-    terrain's normal impulses in ``reaction``; returns the CG iterations taken."""
-    iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+                        normal_floor, friction, ddv, tolerance, max_iterations, b, reaction,
+                        r, s, c, q):
+    """Solve for ddv, updating the contacts between solves (implicit.constraints). Returns the
+    conjugate-gradient iterations taken."""
+    add_scaled(b, rhs, 1.0, friction)
+    iterations, reference = filtered_cg(pattern, blocks, b, kind, normal, ddv, tolerance,
                                         max_iterations, 0.0, r, s, c, q)
-    for attempt in range(MAX_CONTACT_UPDATES):
+    for update in range(MAX_CONTACT_UPDATES):
         block_multiply(pattern, blocks, ddv, q)
-        normal_reactions(kind, normal, q, rhs, reaction)
-        changed = release_pulling_contacts(kind, reaction)
-        changed += add_penetrating_contacts(model, x, v, dv, ddv, h, kind, normal, terrain,
-                                            normal_change)
-        if changed == 0:
+        add_scaled(reaction, q, -1.0, b)
+        if update_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_floor,
+                           friction, reaction) == 0:
             break
-        more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
+        add_scaled(b, rhs, 1.0, friction)
+        more, reference = filtered_cg(pattern, blocks, b, kind, normal, ddv, tolerance,
                                       max_iterations, reference, r, s, c, q)
         iterations += more
-    block_multiply(pattern, blocks, ddv, q)
-    normal_reactions(kind, normal, q, rhs, reaction)
     return iterations
 
 
 @kernel
 def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
-                        blocks, force, rhs, dv, ddv, x_k, v_k, kind, normal, terrain,
-                        normal_change, reaction, r, s, c, q):
+                        work, kind, terrain, normal_floor):
     """One step; returns the conjugate-gradient iterations it took."""
-    find_constraints(model, x, v, h, kind, normal, terrain, normal_change)
+    blocks, force, rhs, b, dv, ddv, x_k, v_k, normal, friction, reaction, r, s, c, q = work
+    find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
@@ -81,25 +77,17 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
     for newton in range(newton_iterations):
         assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
-        # The solve keeps the constrained components of its start: the contacts' normal
-        # velocity change in the first iteration, nothing more after it.
+        ddv[:] = 0.0
         for i in range(x.shape[0]):
-            change = normal_change[i] if newton == 0 and kind[i] == CONTACT else 0.0
-            for k in range(3):
-                ddv[i, k] = change * normal[i, k]
+            hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
         iterations += solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal,
-                                          terrain, normal_change, ddv, tolerance,
-                                          max_iterations, reaction, r, s, c, q)
-        for i in range(x.shape[0]):
-            for k in range(3):
-                dv[i, k] += ddv[i, k]
-                v_k[i, k] = v[i, k] + dv[i, k]
-                x_k[i, k] = x[i, k] + h * v_k[i, k]
-    apply_friction(model, kind, normal, terrain, reaction, v_k)
-    for i in range(x.shape[0]):
-        for k in range(3):
-            v[i, k] = v_k[i, k]
-            x[i, k] += h * v[i, k]
+                                          terrain, normal_floor, friction, ddv, tolerance,
+                                          max_iterations, b, reaction, r, s, c, q)
+        add_scaled(dv, dv, 1.0, ddv)
+        add_scaled(v_k, v, 1.0, dv)
+        add_scaled(x_k, x, h, v_k)
+    v[:] = v_k
+    x[:] = x_k
     return iterations
 
 
@@ -109,18 +97,17 @@ def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_it
     """Take ``steps`` steps; statistics[0] counts the CG iterations. Returns (done, particle)."""
     count = x.shape[0]
     blocks = np.empty((pattern.column.shape[0], 3, 3))
-    force, rhs, dv, ddv = (np.empty_like(x), np.empty_like(x), np.empty_like(x),
-                           np.empty_like(x))
-    x_k, v_k, normal = np.empty_like(x), np.empty_like(x), np.zeros_like(x)
-    r, s, c, q = np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    vectors = [np.zeros_like(x) for _ in range(14)]
+    work = (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
+            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
+            vectors[12], vectors[13])
     kind = np.zeros(count, np.int8)
     terrain = np.zeros(count, np.int64)
-    normal_change, reaction = np.zeros(count), np.zeros(count)
+    normal_floor = np.zeros(count)
     for step in range(steps):
-        statistics[0] += backward_euler_step(
-            model, pattern, x, v, h, newton_iterations, tolerance, max_iterations, blocks,
-            force, rhs, dv, ddv, x_k, v_k, kind, normal, terrain, normal_change, reaction,
-            r, s, c, q)
+        statistics[0] += backward_euler_step(model, pattern, x, v, h, newton_iterations,
+                                             tolerance, max_iterations, work, kind, terrain,
+                                             normal_floor)
         particle = finish_step(model, x, v)
         if particle >= 0:
             return step + 1, particle

@@ -4,6 +4,7 @@ polyscope can be initialised only once in a process, so every caller goes throug
 ``start_renderer``: the first call decides window or headless, later calls only resize.
 """
 import os
+import sys
 
 import numpy as np
 import polyscope as ps
@@ -24,6 +25,9 @@ def start_renderer(*, headless: bool, width: int, height: int) -> str:
         if ps.is_headless():
             ps.set_window_size(int(width), int(height))
         return ps.get_render_engine_backend_name()
+    if not headless and not _has_display():
+        # polyscope would fail too, and then complain again at exit: say it once, plainly
+        raise RenderUnavailable(_advice(False, "DISPLAY is not set"))
     ps.set_program_name("springsim")
     ps.set_use_prefs_file(False)          # polyscope would otherwise write .polyscope.ini here
     ps.set_errors_throw_exceptions(True)
@@ -52,12 +56,18 @@ def _configure_scene() -> None:
     ps.set_build_default_gui_panels(False)
 
 
+def _has_display() -> bool:
+    if not sys.platform.startswith("linux"):
+        return True                      # macOS and Windows always have a screen to open on
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def _advice(headless: bool, error: Exception) -> str:
     if headless:
         return (f"headless rendering needs EGL with Mesa (Debian: apt-get install libegl1 "
                 f"libegl-mesa0 libgl1-mesa-dri): {error}")
-    return (f"no window could be opened (is there a display? DISPLAY must be set; on a machine "
-            f"without one use `springsim render`, or run under xvfb-run): {error}")
+    return (f"no window could be opened ({error}); on a machine without a display use "
+            f"`springsim render`, or run the viewer under xvfb-run")
 
 
 def capture(include_ui: bool = False) -> np.ndarray:

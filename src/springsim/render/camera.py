@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require
-from ..terrains import Bowl, Plane, Sphere
+from ..terrains import Bowl, Plane
 
 FOV_DEGREES = 40.0
 MARGIN = 1.08
@@ -32,6 +32,16 @@ class Camera:
         right = np.cross(forward, self.up)
         right /= np.linalg.norm(right)
         return right, np.cross(right, forward), forward
+
+    def shifted(self, pixels_right: float, height: int) -> "Camera":
+        """The same view moved sideways so that the target appears ``pixels_right`` px right
+        of the picture's centre (to keep a scene clear of a panel on the left)."""
+        right, _, _ = self.basis()
+        distance = float(np.linalg.norm(np.asarray(self.target) - self.eye))
+        metres_per_pixel = 2 * distance * math.tan(math.radians(self.fov_degrees) / 2) / height
+        move = -pixels_right * metres_per_pixel * right
+        return Camera(eye=self.eye + move, target=self.target + move, up=self.up,
+                      fov_degrees=self.fov_degrees)
 
     def project(self, points, width: int, height: int) -> np.ndarray:
         """Pixel coordinates (column, row from the top) of world points, as a pinhole camera."""

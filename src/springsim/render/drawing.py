@@ -117,7 +117,7 @@ class SceneDrawing:
         for number, terrain in enumerate(self.model.terrains):
             name = f"terrain {number}: {type(terrain).__name__.lower()}"
             if isinstance(terrain, Plane):
-                patch = _PlanePatch(name, terrain, self.positions, self.model)
+                patch = _PlanePatch(name, terrain, self.positions)
                 self.parts.append(_Part(patch.mesh, "terrains", patch.follow))
                 patch.part = self.parts[-1]
             elif isinstance(terrain, Bowl):
@@ -167,7 +167,7 @@ class SceneDrawing:
 class _PlanePatch:
     """A checkered square of a plane under the bodies, moved along when they leave its middle."""
 
-    def __init__(self, name, plane, positions, model):
+    def __init__(self, name, plane, positions):
         self.name, self.plane = name, plane
         low = positions.min(axis=0)
         high = positions.max(axis=0)

@@ -143,7 +143,7 @@ class Controls:
         return self._edit(edit, keep_state=False)
 
     def set_cube_rotation(self, degrees: float) -> bool:
-        """Every cube's starting rotation (degrees) about its rotation axis, (1, 0, 1) by default."""
+        """Every cube's starting rotation (degrees) about its axis, (1, 0, 1) by default."""
         def edit(scene):
             for cube in self._cubes(scene):
                 cube.rotation_degrees = float(degrees)

@@ -17,7 +17,7 @@ import numpy as np
 
 @dataclass
 class MouseSpring:
-    stiffness_per_mass: float = 400.0   # w^2 in 1/s^2 (N/m per kg)
+    stiffness_per_mass: float = 5000.0  # w^2 in 1/s^2 (N/m per kg)
     particle: int = -1                  # the held particle, -1 when none
     target: np.ndarray = field(default_factory=lambda: np.zeros(3))
 

@@ -13,7 +13,7 @@ from .controls import TERRAINS
 
 RED = (1.0, 0.15, 0.1, 1.0)
 AMBER = (0.95, 0.65, 0.1, 1.0)
-WIDTH = 340
+WIDTH = 320
 
 
 class Panel:
@@ -28,7 +28,7 @@ class Panel:
         psim.SetNextWindowPos((10, 10), psim.ImGuiCond_FirstUseEver)
         psim.SetNextWindowSize((WIDTH, 0), psim.ImGuiCond_FirstUseEver)
         psim.Begin("springsim", True)
-        psim.PushItemWidth(150)
+        psim.PushItemWidth(130)
         self._message()
         self._run()
         self._figures()
@@ -44,17 +44,17 @@ class Panel:
     # --- sections -------------------------------------------------------------------------
     def _message(self) -> None:
         c = self.controls
-        if c.unstable:
-            lines = c.message.split("\n", 1)
-            psim.TextColored(RED, lines[0])
-            if len(lines) > 1:
-                psim.PushTextWrapPos(WIDTH - 20)
-                psim.TextColored(AMBER, lines[1])
-                psim.PopTextWrapPos()
-        elif c.message:
-            psim.PushTextWrapPos(WIDTH - 20)
+        if not c.message:
+            return
+        psim.PushTextWrapPos(WIDTH - 20)
+        if c.unstable:     # the course's red line, then what diverged and what to try
+            headline, _, details = c.message.partition("\n")
+            psim.TextColored(RED, headline)
+            if details:
+                psim.TextColored(AMBER, details)
+        else:
             psim.TextColored(AMBER, c.message)
-            psim.PopTextWrapPos()
+        psim.PopTextWrapPos()
 
     def _run(self) -> None:
         c = self.controls
@@ -64,11 +64,14 @@ class Panel:
         if c.running:
             if psim.Button("Stop"):
                 c.stop()
-        elif psim.Button("Resume"):
-            c.resume()
-        psim.SameLine()
-        if psim.Button("Step"):
-            c.step_frame()
+        else:
+            psim.BeginDisabled(c.unstable)    # a diverged state must be reset first
+            if psim.Button("Resume"):
+                c.resume()
+            psim.SameLine()
+            if psim.Button("Step"):
+                c.step_frame()
+            psim.EndDisabled()
         psim.SameLine()
         if psim.Button("Reset"):
             c.reset()

@@ -11,10 +11,11 @@ from ..render.backend import capture, start_renderer
 from ..render.camera import VIEWS, apply_camera, frame_points, scene_points
 from ..render.drawing import SceneDrawing
 from .mouse_spring import nearest_particle, point_on_drag_plane
-from .panel import Panel
+from .panel import WIDTH as PANEL_WIDTH, Panel
 from .recorder import ScreenRecorder
 
 MOUSE_SPRING_NAME = "mouse spring"
+PANEL_SPACE = PANEL_WIDTH + 20          # pixels on the left that the panel covers
 
 
 class Viewer:
@@ -56,25 +57,28 @@ class Viewer:
 
     def run(self, frames: int | None = None) -> None:
         """Show the window until it is closed, or for ``frames`` frames."""
-        try:
-            if self.headless:
-                for _ in range(frames or 1):
-                    ps.frame_tick()
-            elif frames is None:
-                ps.show()
-            else:
-                ps.show(frames)
-        finally:
-            if self.recorder.recording:
-                self.recorder.stop()
+        if self.headless:
+            for _ in range(frames or 1):
+                ps.frame_tick()
+        elif frames is None:
+            ps.show()
+        else:
+            ps.show(frames)
+
+    def close(self):
+        """Finish a recording still under way; the path it was written to, if any."""
+        return self.recorder.stop() if self.recorder.recording else None
 
     # --- what the panel asks for ----------------------------------------------------------
     def look(self, view: str) -> None:
         """Frame the scene as it is now from one of the named directions."""
         width, height = ps.get_window_size()
+        height = max(height, 1)
+        panel = min(PANEL_SPACE, width // 2)     # keep the scene clear of the panel
         c = self.controls
         points = scene_points(c.sim.model, c.sim.positions[None])
-        apply_camera(frame_points(points, *VIEWS[view], width / max(height, 1)))
+        camera = frame_points(points, *VIEWS[view], (width - panel) / height)
+        apply_camera(camera.shifted(panel / 2, height))
 
     def set_drawn(self, name: str, shown: bool) -> None:
         setattr(self.controls.draw, name, shown)
