@@ -49,6 +49,6 @@ def perturb(simulation: Simulation, seed: int = 1, squeeze: float = 0.9,
     return simulation
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def cube_simulation():
     return build_cube_simulation

@@ -38,7 +38,7 @@ def find_contacts(x, radius, balls, ball_slot):
 @kernel
 def brute_force_pairs(x, radius, balls, ball_slot):
     """Every contact, by testing every ball against every particle."""
-    capacity = 4 * balls.shape[0] + 16
+    capacity = first_capacity(balls)
     while True:
         owner, partner = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
         count = 0
@@ -60,13 +60,8 @@ def grid_pairs(x, radius, balls, ball_slot):
     Points and balls go in two grids: a ball reaches a point within its own radius, but another
     ball within the sum of both radii, so each grid is searched no further than it needs.
     """
-    largest_radius = 0.0
-    for a in balls:
-        largest_radius = max(largest_radius, radius[a])
-    cell_size = 2.0 * largest_radius  # the largest ball's diameter
-    point_grid = build_grid(x, np.flatnonzero(ball_slot < 0), cell_size)
-    ball_grid = build_grid(x, balls, cell_size)
-    capacity = 4 * balls.shape[0] + 16
+    largest_radius, point_grid, ball_grid = build_grids(x, radius, balls, ball_slot)
+    capacity = first_capacity(balls)
     while True:
         owner, partner = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
         count = 0
@@ -82,6 +77,52 @@ def grid_pairs(x, radius, balls, ball_slot):
         if count <= capacity:
             return as_pairs(owner, partner, count)
         capacity = count  # the buffers were too small: now the count is known
+
+
+@kernel
+def first_capacity(balls):
+    """Room for the pairs on the first try: enough for a ball wrapped in cloth (a few dozen
+    contacts); a crowded step that needs more counts its pairs and tries once more."""
+    return 64 * balls.shape[0] + 64
+
+
+@kernel
+def build_grids(x, radius, balls, ball_slot):
+    """The largest ball radius, and grids of the points and of the balls with cells as wide as
+    the largest ball."""
+    largest_radius = 0.0
+    for a in balls:
+        largest_radius = max(largest_radius, radius[a])
+    cell_size = 2.0 * largest_radius
+    point_grid = build_grid(x, np.flatnonzero(ball_slot < 0), cell_size)
+    ball_grid = build_grid(x, balls, cell_size)
+    return largest_radius, point_grid, ball_grid
+
+
+@kernel
+def search_size(x, radius, balls, ball_slot):
+    """How many distance tests grid_pairs makes (its cost, for tests and tuning)."""
+    largest_radius, point_grid, ball_grid = build_grids(x, radius, balls, ball_slot)
+    tests = 0
+    for a in balls:
+        tests += population(x, point_grid, a, radius[a])
+        tests += population(x, ball_grid, a, radius[a] + largest_radius)
+    return tests
+
+
+@kernel
+def population(x, grid, a, reach):
+    """How many grid members lie in the cells within ``reach`` of particle a."""
+    origin, cell_size, dims, cell_start, members, member_x = grid
+    x_low, x_high = cell_range(x[a, 0], reach, origin[0], cell_size, dims[0])
+    y_low, y_high = cell_range(x[a, 1], reach, origin[1], cell_size, dims[1])
+    z_low, z_high = cell_range(x[a, 2], reach, origin[2], cell_size, dims[2])
+    count = 0
+    for ix in range(x_low, x_high + 1):
+        for iy in range(y_low, y_high + 1):
+            first = (ix * dims[1] + iy) * dims[2]
+            count += cell_start[first + z_high + 1] - cell_start[first + z_low]
+    return count
 
 
 @kernel
@@ -216,9 +257,14 @@ def cell_coordinate(value, origin, cell_size, dim):
 
 @kernel
 def cell_range(centre, reach, origin, cell_size, dim):
-    """First and last cell along one axis that [centre - reach, centre + reach] overlaps."""
-    return (cell_coordinate(centre - reach, origin, cell_size, dim),
-            cell_coordinate(centre + reach, origin, cell_size, dim))
+    """First and last cell along one axis that [centre - reach, centre + reach] overlaps.
+
+    The reach is padded by a millionth so that rounding never leaves out a particle lying on
+    its edge; the distance test decides, so searching a little further changes no result.
+    """
+    padded = reach * (1.0 + 1e-6)
+    return (cell_coordinate(centre - padded, origin, cell_size, dim),
+            cell_coordinate(centre + padded, origin, cell_size, dim))
 
 
 @kernel

@@ -18,7 +18,10 @@ def command_modules():
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="springsim", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="springsim",
+        description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
+                    "of integrators. `springsim COMMAND --help` tells more.")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in command_modules():
         sub = subparsers.add_parser(module.NAME, help=module.HELP, description=module.HELP)

@@ -29,8 +29,6 @@ How contact enters an integrator, and why:
 """
 import math
 
-import numpy as np
-
 from ._jit import kernel
 from .terrains import BOWL, PLANE
 
@@ -98,8 +96,7 @@ def resolve_terrain_impacts(model, x, v):
     radii, epsilon, restitution = (model.terrain_radius, model.terrain_epsilon,
                                    model.terrain_restitution)
     g = model.gravity
-    # below this approach speed a rebound would stay inside the band: resting contact (module doc)
-    resting_speed = np.sqrt(2.0 * math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) * epsilon)
+    g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     for i in range(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
@@ -110,7 +107,9 @@ def resolve_terrain_impacts(model, x, v):
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
             if v_n < 0.0:
-                e = restitution[t] if v_n < -resting_speed[t] else 0.0
+                # slower than this, the rebound would stay in the band: resting contact (module doc)
+                resting_speed = math.sqrt(2.0 * g_size * epsilon[t])
+                e = restitution[t] if -v_n > resting_speed else 0.0
                 bounce = (1.0 + e) * v_n
                 v[i, 0] -= bounce * nx
                 v[i, 1] -= bounce * ny

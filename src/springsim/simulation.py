@@ -48,6 +48,7 @@ class Simulation:
     def step(self, count: int = 1) -> None:
         """Take ``count`` steps of size dt in one compiled call."""
         require(self.dt > 0 and math.isfinite(self.dt), "dt", self.dt, "must be > 0 s")
+        require(count >= 0, "steps", count, "must be >= 0")
         done, particle = self.integrator.advance(self.model, self.state, self.dt, count)
         self.state.time += done * self.dt
         self.steps_taken += done

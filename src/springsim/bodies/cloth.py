@@ -90,8 +90,9 @@ class Cloth:
         require(isinstance(self.pinned, (list, tuple)), f"{key}.pinned", self.pinned,
                 "must be one of " + ", ".join(PINNINGS) + " or a list of particle numbers")
         for index in self.pinned:
-            require(isinstance(index, (int, np.integer)) and 0 <= index < count,
-                    f"{key}.pinned", index, f"particle numbers must be integers in [0, {count - 1}]")
+            whole = isinstance(index, (int, np.integer)) and not isinstance(index, bool)
+            require(whole and 0 <= index < count, f"{key}.pinned", index,
+                    f"particle numbers must be whole numbers in [0, {count - 1}]")
 
     def build(self) -> BuiltBody:
         n = self.particles_per_edge

@@ -17,15 +17,17 @@ Contact, as contact.py does it but for a whole implicit step:
   terrain.
 - Coulomb friction is part of the solve, so that the springs feel it in the same step (applied
   afterwards, it would hold a contact still while the springs carry the rest of the body on, and
-  fold the lattice at the first impact of a large step). A contact is STUCK (tangential velocity
-  held at zero as well) or SLIDING (a kinetic friction impulse friction * lambda_n against its
-  tangential velocity enters the right-hand side).
+  fold the lattice at the first impact of a large step). It enters as a tangential damper of
+  coefficient c = friction * lambda_n / max(|v'_T|, SLIP_SPEED) (N s/m, lambda_n the normal
+  impulse and v'_T the tangential velocity of the last solve): a sliding contact then feels the
+  kinetic friction impulse friction * lambda_n against its motion, and a contact that friction
+  can hold creeps at less than SLIP_SPEED (regularized Coulomb friction). Being a damper, it adds
+  c (I - n n^T) to the matrix, which stays symmetric positive definite.
 - After each solve the contacts are updated from their reaction impulses R = A dv - b, and the
-  system solved again (an active set, a few passes at most): a contact whose normal impulse
-  lambda_n = R . n is negative is released (the terrain can push, not pull); a stuck contact whose
-  tangential impulse leaves the cone |R_T| <= friction * lambda_n starts to slide; a sliding one
-  whose friction has reversed its motion sticks; a free particle that the solved velocities carry
-  into a terrain becomes a contact.
+  system solved again (an active set with a fixed-point update of c, a few passes at most): a
+  contact whose normal impulse lambda_n = R . n is negative is released (the terrain can push,
+  not pull), c is recomputed, and a free particle that the solved velocities carry into a
+  terrain becomes a contact.
 - Restitution is left to the impact pass every integrator runs after its step
   (``_steps.finish_step``), which reflects whatever normal velocity still approaches a terrain.
 One terrain per particle: the one it reaches first. A particle touching two terrains at once has
@@ -38,8 +40,9 @@ import numpy as np
 from .._jit import kernel
 from ..contact import terrain_distance
 
-FREE, SLIDING, STUCK, PINNED = 0, 1, 2, 3
-STICKING_TOLERANCE = 1e-9  # relative slack of the friction cone, against round-off flip-flops
+FREE, CONTACT, PINNED = 0, 1, 2
+SLIP_SPEED = 1e-4        # m/s, the creep speed below which friction acts as a plain damper
+FRICTION_SETTLED = 0.02  # relative change of the friction impulses that needs no new solve
 
 
 @kernel
@@ -78,56 +81,56 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
 
 
 @kernel
-def find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction):
-    """Classify every particle at the start of a step: PINNED, FREE, or a STUCK contact (the
-    first solve tells which contacts slide). Sets each contact's terrain, normal and floor."""
+def make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain, normal_floor):
+    kind[i] = CONTACT
+    terrain[i] = t
+    normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+    normal_floor[i] = lowest_normal_velocity(phi, v_n, h, model.terrain_epsilon[t])
+
+
+@kernel
+def find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping):
+    """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
+    contact's terrain, normal and floor. A contact that continues one of the last step keeps
+    its friction damper as the first guess; a new one starts without."""
     for i in range(x.shape[0]):
+        previous = terrain[i] if kind[i] == CONTACT else -1
         kind[i] = FREE
         terrain[i] = -1
-        friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
         if model.inv_mass[i] == 0.0:
             kind[i] = PINNED
-            continue
-        t, phi, nx, ny, nz, v_n = closest_terrain(model, x, i, v[i, 0], v[i, 1], v[i, 2], h,
-                                                  True)
-        if t >= 0:
-            kind[i] = STUCK
-            terrain[i] = t
-            normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-            normal_floor[i] = lowest_normal_velocity(phi, v_n, h, model.terrain_epsilon[t])
+        else:
+            t, phi, nx, ny, nz, v_n = closest_terrain(model, x, i, v[i, 0], v[i, 1], v[i, 2],
+                                                      h, True)
+            if t >= 0:
+                make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain,
+                             normal_floor)
+        if kind[i] != CONTACT or terrain[i] != previous:
+            friction_damping[i] = 0.0
 
 
 @kernel
 def hold_constrained(i, kind, normal, normal_floor, v, dv, ddv):
-    """Set the components of ddv that particle i's constraint fixes, so that v + dv + ddv
-    meets it: all three at rest for PINNED (v = 0), on the floor with no tangential velocity
-    for STUCK, on the floor for SLIDING. Free components are left as they are."""
-    if kind[i] == FREE:
-        return
+    """Set the components of ddv that particle i's constraint fixes, so that v + dv + ddv meets
+    it: at rest for PINNED (v = 0), on the floor for CONTACT. Free components stay as they are."""
     if kind[i] == PINNED:
         ddv[i, 0] = ddv[i, 1] = ddv[i, 2] = 0.0
-        return
-    nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
-    if kind[i] == STUCK:
-        ddv[i, 0] = normal_floor[i] * nx - u0
-        ddv[i, 1] = normal_floor[i] * ny - u1
-        ddv[i, 2] = normal_floor[i] * nz - u2
-        return
-    gap = normal_floor[i] - (u0 + ddv[i, 0]) * nx - (u1 + ddv[i, 1]) * ny - (u2 + ddv[i, 2]) * nz
-    ddv[i, 0] += gap * nx
-    ddv[i, 1] += gap * ny
-    ddv[i, 2] += gap * nz
+    elif kind[i] == CONTACT:
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        gap = (normal_floor[i] - (v[i, 0] + dv[i, 0] + ddv[i, 0]) * nx
+               - (v[i, 1] + dv[i, 1] + ddv[i, 1]) * ny - (v[i, 2] + dv[i, 2] + ddv[i, 2]) * nz)
+        ddv[i, 0] += gap * nx
+        ddv[i, 1] += gap * ny
+        ddv[i, 2] += gap * nz
 
 
 @kernel
 def filter_constrained(kind, normal, u):
-    """u = S u: remove the normal component of sliding contacts, everything of stuck or pinned
-    particles."""
+    """u = S u: remove the normal component of contacts and everything of pinned particles."""
     for i in range(u.shape[0]):
         if kind[i] == FREE:
             continue
-        if kind[i] != SLIDING:
+        if kind[i] == PINNED:
             u[i, 0] = u[i, 1] = u[i, 2] = 0.0
             continue
         u_n = u[i, 0] * normal[i, 0] + u[i, 1] * normal[i, 1] + u[i, 2] * normal[i, 2]
@@ -136,63 +139,84 @@ def filter_constrained(kind, normal, u):
 
 
 @kernel
-def update_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_floor, friction,
-                    reaction):
+def set_friction_damping(i, value, pattern, blocks, rhs, normal, v, dv, friction_damping):
+    """Make particle i's friction damper c = value in the system: its diagonal block holds
+    c (I - n n^T), and the right-hand side -c (I - n n^T)(v + dv), so that the impulse on the
+    solved velocity change ddv is -c (I - n n^T)(v + dv + ddv)."""
+    change = value - friction_damping[i]
+    if change == 0.0:
+        return
+    friction_damping[i] = value
+    slot = pattern.diagonal_slot[i]
+    nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+    n = (nx, ny, nz)
+    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
+    u_n = u0 * nx + u1 * ny + u2 * nz
+    rhs[i, 0] -= change * (u0 - u_n * nx)
+    rhs[i, 1] -= change * (u1 - u_n * ny)
+    rhs[i, 2] -= change * (u2 - u_n * nz)
+    for r in range(3):
+        for c in range(3):
+            blocks[slot, r, c] += change * ((1.0 if r == c else 0.0) - n[r] * n[c])
+
+
+@kernel
+def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
+    """The friction damper that gives contact i the Coulomb impulse, estimated from the last
+    solve as if the rest of the system stayed put. With the particle's own tangential stiffness
+    d (its diagonal block across the normal, without friction) and damper c, the solve left it
+    the tangential momentum p = (d + c) slip. Coulomb friction removes min(p, coulomb) of it:
+    it slides on at (p - coulomb) / d > SLIP_SPEED with c = coulomb / slip, or it holds, with
+    c = coulomb / SLIP_SPEED."""
+    slot = pattern.diagonal_slot[i]
+    along_normal = 0.0
+    for r in range(3):
+        for c in range(3):
+            along_normal += normal[i, r] * blocks[slot, r, c] * normal[i, c]
+    trace = blocks[slot, 0, 0] + blocks[slot, 1, 1] + blocks[slot, 2, 2]
+    stiffness = 0.5 * (trace - along_normal) - damping
+    momentum = (stiffness + damping) * slip
+    sliding = (momentum - coulomb) / stiffness
+    if sliding > SLIP_SPEED:
+        return coulomb / sliding
+    return coulomb / SLIP_SPEED
+
+
+@kernel
+def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, terrain,
+                    normal_floor, friction_damping, reaction):
     """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
-    solve. Adjusts ddv to every changed constraint; returns how many changed."""
+    solve. Adjusts ddv, the matrix and the right-hand side to every change. Returns whether
+    another solve is needed: some contact came or went, or the friction impulses (summed over
+    all contacts) moved by more than FRICTION_SETTLED of their total."""
     changed = 0
+    friction_total = friction_moved = 0.0
     for i in range(x.shape[0]):
         if kind[i] == PINNED:
             continue
+        u0, u1, u2 = (v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1],
+                      v[i, 2] + dv[i, 2] + ddv[i, 2])   # the velocity at the end of the step
         if kind[i] == FREE:
-            t, phi, nx, ny, nz, _ = closest_terrain(model, x, i, v[i, 0] + dv[i, 0] + ddv[i, 0],
-                                                    v[i, 1] + dv[i, 1] + ddv[i, 1],
-                                                    v[i, 2] + dv[i, 2] + ddv[i, 2], h, False)
+            t, phi, nx, ny, nz, _ = closest_terrain(model, x, i, u0, u1, u2, h, False)
             if t >= 0:
-                kind[i] = STUCK
-                terrain[i] = t
-                normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-                normal_floor[i] = lowest_normal_velocity(phi, v_n, h,
-                                                         model.terrain_epsilon[t])
+                make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain,
+                             normal_floor)
                 hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
                 changed += 1
             continue
         nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-        r_n = reaction[i, 0] * nx + reaction[i, 1] * ny + reaction[i, 2] * nz
-        if r_n < 0.0:
+        impulse_n = reaction[i, 0] * nx + reaction[i, 1] * ny + reaction[i, 2] * nz
+        if impulse_n < 0.0:
             kind[i] = FREE   # the terrain would have to pull
-            friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
+            set_friction_damping(i, 0.0, pattern, blocks, rhs, normal, v, dv, friction_damping)
             changed += 1
             continue
-        limit = model.terrain_friction[terrain[i]] * r_n
-        if kind[i] == STUCK:
-            tx, ty, tz = reaction[i, 0] - r_n * nx, reaction[i, 1] - r_n * ny, reaction[i, 2] - r_n * nz
-            holding = math.sqrt(tx * tx + ty * ty + tz * tz)
-            if holding > limit * (1.0 + STICKING_TOLERANCE):
-                kind[i] = SLIDING   # friction at the edge of the cone, the way it pulled
-                scale = limit / holding
-                friction[i, 0], friction[i, 1], friction[i, 2] = scale * tx, scale * ty, scale * tz
-                changed += 1
-            continue
-        # sliding: kinetic friction against the tangential velocity just solved for
-        u0, u1, u2 = v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1], \
-            v[i, 2] + dv[i, 2] + ddv[i, 2]
         u_n = u0 * nx + u1 * ny + u2 * nz
-        tx, ty, tz = u0 - u_n * nx, u1 - u_n * ny, u2 - u_n * nz
-        if tx * friction[i, 0] + ty * friction[i, 1] + tz * friction[i, 2] > 0.0:
-            kind[i] = STUCK   # friction turned the motion around: it would have stopped
-            friction[i, 0] = friction[i, 1] = friction[i, 2] = 0.0
-            hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
-            changed += 1
-            continue
-        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
-        if speed == 0.0:
-            continue
-        fx, fy, fz = -limit * tx / speed, -limit * ty / speed, -limit * tz / speed
-        shift = math.sqrt((fx - friction[i, 0]) ** 2 + (fy - friction[i, 1]) ** 2
-                          + (fz - friction[i, 2]) ** 2)
-        if shift > 1e-3 * limit:
-            changed += 1
-        friction[i, 0], friction[i, 1], friction[i, 2] = fx, fy, fz
-    return changed
+        slip = math.sqrt((u0 - u_n * nx) ** 2 + (u1 - u_n * ny) ** 2 + (u2 - u_n * nz) ** 2)
+        coulomb = model.terrain_friction[terrain[i]] * impulse_n
+        damping = coulomb_damping(pattern, blocks, normal, i, friction_damping[i], slip, coulomb)
+        friction_total += coulomb
+        friction_moved += abs(damping - friction_damping[i]) * max(slip, SLIP_SPEED)
+        set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv, friction_damping)
+    return changed > 0 or friction_moved > FRICTION_SETTLED * friction_total

@@ -17,7 +17,8 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.cg import filtered_cg
-from ..implicit.constraints import find_constraints, hold_constrained, update_contacts
+from ..implicit.constraints import (find_constraints, hold_constrained, set_friction_damping,
+                                    update_contacts)
 from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
                                  particle_mass)
 from ..implicit.pattern import build_block_pattern
@@ -44,70 +45,74 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
 
 @kernel
 def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, terrain,
-                        normal_floor, friction, ddv, tolerance, max_iterations, b, reaction,
-                        r, s, c, q):
-    """Solve for ddv, updating the contacts between solves (implicit.constraints). Returns the
-    conjugate-gradient iterations taken."""
-    add_scaled(b, rhs, 1.0, friction)
-    iterations, reference = filtered_cg(pattern, blocks, b, kind, normal, ddv, tolerance,
+                        normal_floor, friction_damping, ddv, tolerance, max_iterations,
+                        reaction, r, s, c, q):
+    """Solve for ddv, updating contacts and friction between solves (implicit.constraints).
+    Returns the conjugate-gradient iterations taken and the number of solves."""
+    iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                         max_iterations, 0.0, r, s, c, q)
+    solves = 1
     for update in range(MAX_CONTACT_UPDATES):
         block_multiply(pattern, blocks, ddv, q)
-        add_scaled(reaction, q, -1.0, b)
-        if update_contacts(model, x, v, dv, ddv, h, kind, normal, terrain, normal_floor,
-                           friction, reaction) == 0:
+        add_scaled(reaction, q, -1.0, rhs)
+        if not update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
+                               terrain, normal_floor, friction_damping, reaction):
             break
-        add_scaled(b, rhs, 1.0, friction)
-        more, reference = filtered_cg(pattern, blocks, b, kind, normal, ddv, tolerance,
+        more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                       max_iterations, reference, r, s, c, q)
         iterations += more
-    return iterations
+        solves += 1
+    return iterations, solves
 
 
 @kernel
 def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
-                        work, kind, terrain, normal_floor):
-    """One step; returns the conjugate-gradient iterations it took."""
-    blocks, force, rhs, b, dv, ddv, x_k, v_k, normal, friction, reaction, r, s, c, q = work
-    find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction)
+                        work, kind, terrain, normal_floor, friction_damping, statistics):
+    """One step; adds its conjugate-gradient iterations and linear solves to statistics."""
+    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q = work
+    find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
-    iterations = 0
     for newton in range(newton_iterations):
         assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
         ddv[:] = 0.0
         for i in range(x.shape[0]):
             hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
-        iterations += solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal,
-                                          terrain, normal_floor, friction, ddv, tolerance,
-                                          max_iterations, b, reaction, r, s, c, q)
+            damping = friction_damping[i]   # the fresh matrix has none yet
+            friction_damping[i] = 0.0
+            set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
+                                 friction_damping)
+        iterations, solves = solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind,
+                                                 normal, terrain, normal_floor, friction_damping,
+                                                 ddv, tolerance, max_iterations, reaction,
+                                                 r, s, c, q)
+        statistics[0] += iterations
+        statistics[1] += solves
         add_scaled(dv, dv, 1.0, ddv)
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
     v[:] = v_k
     x[:] = x_k
-    return iterations
 
 
 @kernel
 def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_iterations,
-            statistics):
-    """Take ``steps`` steps; statistics[0] counts the CG iterations. Returns (done, particle)."""
-    count = x.shape[0]
+            kind, terrain, normal_floor, friction_damping, statistics):
+    """Take ``steps`` steps; returns (steps done, first diverged particle or -1).
+
+    kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
+    call) to the next; statistics[0] and [1] count the conjugate-gradient iterations and the
+    linear solves."""
     blocks = np.empty((pattern.column.shape[0], 3, 3))
-    vectors = [np.zeros_like(x) for _ in range(14)]
+    vectors = [np.zeros_like(x) for _ in range(12)]
     work = (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
-            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
-            vectors[12], vectors[13])
-    kind = np.zeros(count, np.int8)
-    terrain = np.zeros(count, np.int64)
-    normal_floor = np.zeros(count)
+            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11])
     for step in range(steps):
-        statistics[0] += backward_euler_step(model, pattern, x, v, h, newton_iterations,
-                                             tolerance, max_iterations, work, kind, terrain,
-                                             normal_floor)
+        backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance,
+                            max_iterations, work, kind, terrain, normal_floor, friction_damping,
+                            statistics)
         particle = finish_step(model, x, v)
         if particle >= 0:
             return step + 1, particle
@@ -137,19 +142,27 @@ class ImplicitEuler(Integrator):
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
-        self.cg_iterations = np.zeros(1, np.int64)   # running total, for diagnostics
-        self._pattern_model, self._pattern = None, None
+        # running totals, for diagnostics: conjugate-gradient iterations, linear solves
+        self.statistics = np.zeros(2, np.int64)
+        self._model = self._pattern = self._contacts = None
 
-    def pattern_for(self, model):
-        """The model's block pattern, built on first use and kept for as long as the model."""
-        if self._pattern_model is not model:
-            self._pattern_model, self._pattern = model, build_block_pattern(model.arrays)
-        return self._pattern
+    def prepared(self, model):
+        """The model's block pattern and contact memory, built on first use and kept for as
+        long as the model (a Simulation keeps one model)."""
+        if self._model is not model:
+            count = model.particle_count
+            self._model = model
+            self._pattern = build_block_pattern(model.arrays)
+            self._contacts = (np.zeros(count, np.int8), np.full(count, -1, np.int64),
+                              np.zeros(count), np.zeros(count))
+        return self._pattern, self._contacts
 
     def advance(self, model, state, dt, steps):
-        done, particle = advance(model.arrays, self.pattern_for(model), state.positions,
-                                 state.velocities, float(dt), int(steps), self.newton_iterations,
-                                 self.cg_tolerance, self.cg_max_iterations, self.cg_iterations)
+        pattern, contacts = self.prepared(model)
+        done, particle = advance(model.arrays, pattern, state.positions, state.velocities,
+                                 float(dt), int(steps), self.newton_iterations,
+                                 self.cg_tolerance, self.cg_max_iterations, *contacts,
+                                 self.statistics)
         return int(done), int(particle)
 
 
