@@ -16,7 +16,7 @@ How contact enters an integrator, and why:
    negative (it leaves fast, or is pulled away). Cancelling the whole push instead would let it
    coast outwards at constant speed to the edge of the band, fall back in, bounce, and repeat: an
    endless chatter fed by a reaction doing positive work, with friction lost on every excursion
-   (a cube on a slope crept and toppled that way).
+   (a cube resting on the plane kept vibrating that way, and one on a steep slope crept).
 2. After the whole step, an impact pass: a particle within the band that still approaches the
    surface has its normal velocity reflected with restitution (v' = -e v_N + v_T), and a particle
    that ended the step inside the surface is moved back onto it. A step of any size therefore ends
