@@ -17,19 +17,25 @@ Contact, as contact.py does it but for a whole implicit step:
   terrain.
 - Coulomb friction is part of the solve, so that the springs feel it in the same step (applied
   afterwards, it would hold a contact still while the springs carry the rest of the body on, and
-  fold the lattice at the first impact of a large step). It enters as a tangential damper of
-  coefficient c = friction * lambda_n / max(|v'_T|, SLIP_SPEED) (N s/m, lambda_n the normal
-  impulse and v'_T the tangential velocity of the last solve): a sliding contact then feels the
-  kinetic friction impulse friction * lambda_n against its motion, and a contact that friction
-  can hold creeps at less than SLIP_SPEED (regularized Coulomb friction). Being a damper, it adds
-  c (I - n n^T) to the matrix, which stays symmetric positive definite.
+  fold the lattice at the first impact of a large step). It enters as a tangential damper: c
+  (N s/m) times the tangential velocity, against it, which adds c (I - n n^T) to the matrix and
+  keeps it symmetric positive definite. c is chosen after each solve (``coulomb_damping``) so
+  that the impulse is friction * lambda_n (lambda_n the normal impulse) on a contact that
+  slides, and so that a contact friction can hold creeps at most at SLIP_SPEED (regularized
+  Coulomb friction: a slip speed that no one will see, and no sticking state to flip in and
+  out of).
 - After each solve the contacts are updated from their reaction impulses R = A dv - b, and the
   system solved again (an active set with a fixed-point update of c, a few passes at most): a
   contact whose normal impulse lambda_n = R . n is negative is released (the terrain can push,
   not pull), c is recomputed, and a free particle that the solved velocities carry into a
-  terrain becomes a contact.
+  terrain becomes a contact. Contacts and their c carry over to the next step as its first
+  guess, so a body at rest or sliding steadily needs one solve a step.
 - Restitution is left to the impact pass every integrator runs after its step
   (``_steps.finish_step``), which reflects whatever normal velocity still approaches a terrain.
+  A contact that the floor slowed down (an impact: it came in faster than the floor allows) ends
+  the step on the surface, and gets its approach speed back for that pass to reflect: the
+  bounce is e times the speed of the impact, not of the slowed arrival
+  (``restore_impact_speeds``).
 One terrain per particle: the one it reaches first. A particle touching two terrains at once has
 the second handled by the impact pass alone.
 """
@@ -41,7 +47,7 @@ from .._jit import kernel
 from ..contact import terrain_distance
 
 FREE, CONTACT, PINNED = 0, 1, 2
-SLIP_SPEED = 1e-4        # m/s, the creep speed below which friction acts as a plain damper
+SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
 FRICTION_SETTLED = 0.02  # relative change of the friction impulses that needs no new solve
 
 
@@ -220,3 +226,24 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
         friction_moved += abs(damping - friction_damping[i]) * max(slip, SLIP_SPEED)
         set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv, friction_damping)
     return changed > 0 or friction_moved > FRICTION_SETTLED * friction_total
+
+
+@kernel
+def restore_impact_speeds(kind, normal, normal_floor, v_start, v_end):
+    """Give every contact that hit its terrain this step (it started faster into it than its
+    floor) its normal velocity from the start of the step back, for the impact pass to reflect;
+    its position already ends on the surface (module doc)."""
+    for i in range(v_end.shape[0]):
+        if kind[i] != CONTACT:
+            continue
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        approach = v_start[i, 0] * nx + v_start[i, 1] * ny + v_start[i, 2] * nz
+        if approach >= normal_floor[i]:
+            continue
+        end = v_end[i, 0] * nx + v_end[i, 1] * ny + v_end[i, 2] * nz
+        if end > normal_floor[i] + 1e-12 * abs(normal_floor[i]) + 1e-12:
+            continue   # the springs carried it off the surface: no impact to restore
+        change = approach - end
+        v_end[i, 0] += change * nx
+        v_end[i, 1] += change * ny
+        v_end[i, 2] += change * nz

@@ -66,12 +66,17 @@ def assemble_system(model, pattern, x, mass_scale, damping_scale, stiffness_scal
                           pattern.spring_slots[s, 2], pattern.spring_slots[s, 3])
         l = (l0, l1, l2)
         for r in range(3):
-            for c in range(3):
+            for c in range(r, 3):   # each value computed once: the matrix is exactly symmetric
                 value = p * l[r] * l[c] + (q if r == c else 0.0)
                 blocks[aa, r, c] += value
                 blocks[bb, r, c] += value
                 blocks[ab, r, c] -= value
                 blocks[ba, r, c] -= value
+                if c != r:
+                    blocks[aa, c, r] += value
+                    blocks[bb, c, r] += value
+                    blocks[ab, c, r] -= value
+                    blocks[ba, c, r] -= value
 
 
 @kernel

@@ -5,11 +5,17 @@ Backward Euler takes the new velocity's forces: with dv = v' - v,
     M dv = h F(x + h (v + dv), v + dv),    x' = x + h v'.
 Linearizing F about the start of the step gives one linear system for dv,
     (M - h dF/dv - h^2 dF/dx) dv = h (F(x, v) + h dF/dx v),
-solved by filtered conjugate gradients with contacts and pinned particles as constraints
-(``springsim.implicit``). Each further Newton iteration relinearizes about the latest estimate
+solved by Jacobi-preconditioned conjugate gradients. Each further Newton iteration
+(``newton_iterations``, default 1) relinearizes about the latest estimate
 (x_k, v_k) = (x + h (v + dv_k), v + dv_k) and solves
     (M - h dF/dv - h^2 dF/dx)(x_k) ddv = h F(x_k, v_k) - M dv_k.
-The matrix has a block sparsity pattern fixed by the springs, built once per model.
+
+``springsim.implicit`` holds the parts: the Jacobians (and what is left out of them to keep the
+matrix symmetric positive definite) in jacobian.py, the block sparsity pattern, fixed by the
+springs and built once per model, in pattern.py, the filtered solve in cg.py, and pinned
+particles and terrain contact (normal velocity floors, friction inside the solve, restitution)
+as constraints of the solve in constraints.py. After each step the impact pass and the
+divergence check every integrator runs (``_steps.finish_step``).
 """
 import numpy as np
 
@@ -17,15 +23,15 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.cg import filtered_cg
-from ..implicit.constraints import (find_constraints, hold_constrained, set_friction_damping,
-                                    update_contacts)
+from ..implicit.constraints import (find_constraints, hold_constrained,
+                                    restore_impact_speeds, set_friction_damping, update_contacts)
 from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
                                  particle_mass)
 from ..implicit.pattern import build_block_pattern
 from . import Integrator, register
 from ._steps import add_scaled, finish_step
 
-MAX_CONTACT_UPDATES = 4   # re-solves after changing the set of contacts, per Newton iteration
+MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
 
 
 @kernel
@@ -93,8 +99,18 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
         add_scaled(dv, dv, 1.0, ddv)
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
-    v[:] = v_k
     x[:] = x_k
+    restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect
+    v[:] = v_k
+
+
+@kernel
+def workspace(pattern, x):
+    """The arrays a step works in: the matrix blocks and twelve vectors shaped like x."""
+    blocks = np.empty((pattern.column.shape[0], 3, 3))
+    vectors = [np.zeros_like(x) for _ in range(12)]
+    return (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
+            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11])
 
 
 @kernel
@@ -105,10 +121,7 @@ def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_it
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
     call) to the next; statistics[0] and [1] count the conjugate-gradient iterations and the
     linear solves."""
-    blocks = np.empty((pattern.column.shape[0], 3, 3))
-    vectors = [np.zeros_like(x) for _ in range(12)]
-    work = (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
-            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11])
+    work = workspace(pattern, x)
     for step in range(steps):
         backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance,
                             max_iterations, work, kind, terrain, normal_floor, friction_damping,

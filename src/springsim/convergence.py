@@ -1,0 +1,104 @@
+"""Measured order of accuracy of every integrator on a smooth, contact-free problem.
+
+The problem: a small jelly cube (4 particles per edge, the course's 4 m edge and 1 kg particles,
+ks = 2000 N/m, lightly damped with kd = 10 N s/m so that it still rings at the final time) with no
+gravity and no terrain, released from rest squeezed to 80 % of its length along x. Nothing in it
+is discontinuous, so every method shows its order: the error at the final time against a SciPy
+``solve_ivp`` DOP853 solution at rtol = atol = 1e-12 on the same forces (``springsim.forces``)
+falls as dt^p. The slope p is fitted to log(error) against log(dt).
+
+The steps are chosen per order, so that every error lies in the asymptotic range (below, the
+fast modes are resolved; above the reference's and round-off's floor): halvings from 2000 steps
+for first-order methods, 250 for second and 125 for fourth. Backward Euler's linear solves run to
+a relative residual of 1e-12 here, so that its error is the method's and not the solver's.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bodies.cube import Cube
+from .forces import forces
+from .scene import Scene
+from .simulation import Simulation
+from .springs import SpringParameters
+
+FINAL_TIME = 0.5   # s
+SQUEEZE = 0.8      # length along x at the start, as a share of the rest length
+STEP_COUNTS = {1: (2000, 4000, 8000, 16000), 2: (250, 500, 1000, 2000), 4: (125, 250, 500, 1000)}
+EXACT_SOLVES = {"implicit_euler": {"cg_tolerance": 1e-12, "cg_max_iterations": 10000}}
+
+
+@dataclass(frozen=True)
+class ConvergenceResult:
+    integrator: str
+    expected_order: int
+    dts: tuple       # s
+    errors: tuple    # m, largest position error at the final time
+
+    @property
+    def slope(self) -> float:
+        """The fitted order: the slope of log(error) against log(dt)."""
+        return fitted_slope(self.dts, self.errors)
+
+
+def fitted_slope(dts, errors) -> float:
+    return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
+
+
+def squeezed_cube(integrator: str = "rk4", dt: float = 1e-3, options: dict | None = None,
+                  particles_per_edge: int = 4) -> Simulation:
+    """The problem of the module doc, ready to step."""
+    springs = SpringParameters(ks=2000.0, kd=10.0)
+    cube = Cube(particles_per_edge=particles_per_edge, position=(0.0, 0.0, 0.0),
+                structural=springs, shear=springs, bend=springs)
+    scene = Scene(name="squeezed-cube", bodies=[cube], terrains=[], gravity=(0.0, 0.0, 0.0))
+    simulation = Simulation(scene, integrator=integrator, dt=dt, **(options or {}))
+    x = simulation.state.positions
+    centre = x[:, 0].mean()
+    x[:, 0] = centre + SQUEEZE * (x[:, 0] - centre)
+    return simulation
+
+
+def reference_positions(simulation: Simulation, final_time: float) -> np.ndarray:
+    """The positions at ``final_time`` from DOP853 at rtol = atol = 1e-12, starting from the
+    simulation's state."""
+    from scipy.integrate import solve_ivp
+
+    arrays = simulation.model.arrays
+    inverse_mass = arrays.inv_mass[:, None]
+    half = simulation.positions.size
+
+    def derivative(_, y):
+        x, v = y[:half].reshape(-1, 3), y[half:].reshape(-1, 3)
+        return np.concatenate([v.ravel(), (forces(arrays, x, v) * inverse_mass).ravel()])
+
+    start = np.concatenate([simulation.positions.ravel(), simulation.velocities.ravel()])
+    solution = solve_ivp(derivative, (simulation.time, simulation.time + final_time), start,
+                         method="DOP853", rtol=1e-12, atol=1e-12)
+    if not solution.success:
+        raise RuntimeError(f"the reference solve failed: {solution.message}")
+    return solution.y[:half, -1].reshape(-1, 3)
+
+
+def measure_convergence(integrators, final_time: float = FINAL_TIME,
+                        step_counts: dict | None = None, on_result=None) -> list:
+    """A ConvergenceResult per integrator; ``step_counts`` maps an order to its step counts
+    (default STEP_COUNTS). ``on_result(result)`` is called after each integrator."""
+    from .integrators import REGISTRY
+
+    step_counts = step_counts or STEP_COUNTS
+    reference = reference_positions(squeezed_cube(), final_time)
+    results = []
+    for name in integrators:
+        order = REGISTRY[name].order
+        counts = step_counts[min(step_counts, key=lambda o: abs(o - order))]
+        dts, errors = [], []
+        for count in counts:
+            simulation = squeezed_cube(name, final_time / count, EXACT_SOLVES.get(name))
+            simulation.step(count)
+            dts.append(final_time / count)
+            errors.append(float(np.abs(simulation.positions - reference).max()))
+        results.append(ConvergenceResult(name, order, tuple(dts), tuple(errors)))
+        if on_result is not None:
+            on_result(results[-1])
+    return results
