@@ -395,3 +395,21 @@ def test_jelly_scenes_at_a_30_hz_step(scene):
         assert acceleration == pytest.approx(9.8 * np.sqrt(0.5) * 0.7, rel=0.02)
     else:   # it slid off the sphere (it lands off-centre) and falls freely
         assert velocities[10] - velocities[9] == pytest.approx([0.0, -9.8, 0.0], abs=1e-4)
+
+
+def test_scene_implicit_settings_reach_the_solver():
+    """A scene's [implicit] table and Simulation keyword options give the very same step."""
+    from springsim import load_scene
+
+    overrides = ["implicit.newton_iterations=3", "implicit.cg_tolerance=1e-10",
+                 "bodies.0.particles_per_edge=4"]
+    from_scene = Simulation(load_scene("jelly-plane", overrides), integrator="implicit_euler",
+                            dt=1 / 30)
+    by_keyword = Simulation(load_scene("jelly-plane", overrides[2:]), integrator="implicit_euler",
+                            dt=1 / 30, newton_iterations=3, cg_tolerance=1e-10)
+    one_iteration = Simulation(load_scene("jelly-plane", overrides[2:]),
+                               integrator="implicit_euler", dt=1 / 30)
+    for simulation in (from_scene, by_keyword, one_iteration):
+        simulation.advance(1.0)
+    assert np.array_equal(from_scene.positions, by_keyword.positions)
+    assert not np.array_equal(from_scene.positions, one_iteration.positions)

@@ -11,6 +11,15 @@ from .errors import require
 
 
 @dataclass
+class ImplicitSettings:
+    """Settings of the implicit integrators (implicit_euler); the explicit ones ignore them."""
+
+    newton_iterations: int = 1        # linearized solves per step (1: Baraff-Witkin)
+    cg_tolerance: float = 1e-5        # relative residual of each conjugate-gradient solve
+    cg_max_iterations: int = 500
+
+
+@dataclass
 class Scene:
     name: str = "custom"
     bodies: list = field(default_factory=list)
@@ -20,6 +29,7 @@ class Scene:
     duration: float = 8.0                 # s, how long `springsim run` simulates
     gravity: tuple = (0.0, -9.8, 0.0)     # m/s^2
     drag: float = 0.0                     # viscous drag coefficient, N s/m (f = -drag v)
+    implicit: ImplicitSettings = field(default_factory=ImplicitSettings)
 
     def validate(self) -> None:
         from .integrators import integrator_names

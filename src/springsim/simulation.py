@@ -11,11 +11,21 @@ from .scene import check_bodies_outside_terrains
 from .state import State
 
 
+def integrator_settings(scene, overrides: dict) -> dict:
+    """The scene's settings for its integrator (those it declares in OPTIONS), then overrides."""
+    from .integrators import REGISTRY
+
+    accepted = getattr(REGISTRY.get(scene.integrator), "OPTIONS", ())
+    settings = {name: getattr(scene.implicit, name) for name in accepted
+                if hasattr(scene.implicit, name)}
+    return {**settings, **overrides}
+
+
 class Simulation:
     """Simulate ``scene`` with ``integrator`` (a registered name) and time step ``dt`` (s).
 
-    Both default to the scene's own. ``integrator_options`` go to the integrator (for example
-    ``newton_iterations`` for implicit methods).
+    Both default to the scene's own. ``integrator_options`` go to the integrator and win over the
+    scene's ``implicit`` settings (for example ``newton_iterations=2`` for implicit_euler).
     """
 
     def __init__(self, scene, integrator: str | None = None, dt: float | None = None,
@@ -28,7 +38,8 @@ class Simulation:
         self.scene = scene
         self.model = build_model(scene)
         check_bodies_outside_terrains(self.model)
-        self.integrator = get_integrator(scene.integrator, **integrator_options)
+        self.integrator = get_integrator(scene.integrator,
+                                         **integrator_settings(scene, integrator_options))
         self.dt = float(scene.dt)
         self.state = State.initial(self.model)
         self.steps_taken = 0

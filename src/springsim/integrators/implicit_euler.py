@@ -146,11 +146,11 @@ class ImplicitEuler(Integrator):
         for key, value in others.items():
             raise SceneError(f"integrator option {key}", value,
                              f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
-        require(_is_whole(newton_iterations) and newton_iterations >= 1, "newton_iterations",
+        require(_is_whole(newton_iterations) and newton_iterations >= 1, "implicit.newton_iterations",
                 newton_iterations, "must be a whole number >= 1")
-        require(_is_number(cg_tolerance) and 0 < cg_tolerance < 1, "cg_tolerance",
+        require(_is_number(cg_tolerance) and 0 < cg_tolerance < 1, "implicit.cg_tolerance",
                 cg_tolerance, "must be a relative residual in (0, 1)")
-        require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1, "cg_max_iterations",
+        require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1, "implicit.cg_max_iterations",
                 cg_max_iterations, "must be a whole number >= 1")
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
