@@ -104,6 +104,7 @@ def record(simulation, duration: float, fps: float, progress: bool = False) -> R
     check_memory(len(frame_steps), simulation.model.particle_count, fps)
     recording = Recording.empty(simulation, len(frame_steps), fps)
     recording.capture(0, simulation)
+    simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
     started = time.perf_counter()
     with tqdm(total=int(frame_steps[-1]), unit="step", desc=simulation.scene.name, leave=False,
               file=sys.stderr, disable=None if progress else True) as bar:
