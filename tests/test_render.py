@@ -126,3 +126,13 @@ def test_bad_outputs_are_refused_before_rendering_and_leave_nothing(renderer, tm
             writer.append(np.zeros((48, 64, 3), np.uint8))
             writer.append(np.zeros((40, 64, 3), np.uint8))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_video_frames_are_in_real_time_when_a_frame_is_not_a_whole_number_of_steps():
+    """At dt = 1/60 s and 25 fps a frame is 2.4 steps: frame k must still show t = k / 25."""
+    sim = springsim.Simulation(springsim.load_scene("jelly-plane",
+                                                    ["bodies.0.particles_per_edge=3"]),
+                               integrator="implicit_euler", dt=1 / 60)
+    times, positions = simulate_frames(sim, 2.0, 25, progress=False)
+    assert len(times) == 50
+    assert np.all(np.abs(times - np.arange(50) / 25) <= sim.dt / 2 + 1e-12)

@@ -250,3 +250,9 @@ def test_an_unreadable_scene_file_is_refused(tmp_path):
             load_scene(name)
         assert (error.value.key, error.value.value) == ("scene", name)
         assert allowed in error.value.allowed
+
+
+def test_a_ball_starting_inside_a_terrain_is_named_by_its_own_key():
+    scene = load_scene("jelly-balls", ["bodies.1.balls.2.position=[0, -1, 0]"])
+    with pytest.raises(SceneError, match=r"bodies\.1\.balls\.2\.position = \(0\.0, -1\.0, 0\.0\)"):
+        Simulation(scene)

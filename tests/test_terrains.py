@@ -95,16 +95,32 @@ def test_kinetic_friction_on_the_45_degree_plane(cube_simulation, friction):
         np.testing.assert_allclose(a, np.broadcast_to(expected, a.shape), atol=1e-12)
 
 
-def test_kinetic_friction_opposes_a_sideways_slide(cube_simulation):
-    """Sliding fast across the slope, friction mu g cos 45 points against the velocity."""
-    friction, speed = 0.3, 50.0
+@pytest.mark.parametrize("speed", [0.005, 0.05, 50.0])
+def test_kinetic_friction_opposes_a_sideways_slide(cube_simulation, speed):
+    """Sliding across the slope, friction mu g cos 45 points exactly against the velocity, slow
+    or fast (any speed that friction cannot stop within the step, here above 2.1 mm/s)."""
+    friction = 0.3
     simulation = free_particles(cube_simulation, tilted_plane(friction=friction))
     across = np.array([0.0, 0.0, 1.0])
     x = points_on_plane(SLOPE_NORMAL)
     a = contact_acceleration(simulation, x, np.tile(speed * across, (len(x), 1)))
     np.testing.assert_allclose(a @ SLOPE_NORMAL, 0.0, atol=1e-12)
-    np.testing.assert_allclose(a @ DOWN_SLOPE, G * math.sin(SLOPE), rtol=2e-3)
-    np.testing.assert_allclose(a @ across, -friction * G * math.cos(SLOPE), rtol=2e-3)
+    np.testing.assert_allclose(a @ DOWN_SLOPE, G * math.sin(SLOPE), rtol=1e-12)
+    np.testing.assert_allclose(a @ across, -friction * G * math.cos(SLOPE), rtol=1e-12)
+
+
+def test_friction_at_the_end_of_a_slide_is_still_bounded_by_the_cone(cube_simulation):
+    """Slower than friction could stop within the step, but pulled harder than the cone holds:
+    the friction has exactly the Coulomb size mu g cos 45 (and no division by |v_T| happens)."""
+    friction, h = 0.3, 1e-3
+    simulation = free_particles(cube_simulation, tilted_plane(friction=friction))
+    x = points_on_plane(SLOPE_NORMAL)
+    for speed in (0.0, 1e-4, 1e-3):
+        v = np.tile(speed * np.array([0.0, 0.0, 1.0]), (len(x), 1))
+        a = contact_acceleration(simulation, x, v, h)
+        friction_part = a - G * math.sin(SLOPE) * DOWN_SLOPE
+        np.testing.assert_allclose(np.linalg.norm(friction_part, axis=1),
+                                   friction * G * math.cos(SLOPE), rtol=1e-12)
 
 
 @pytest.mark.parametrize("terrain", [Plane(point=(0.3, -1.0, 2.0), normal=(0.2, 1.0, -0.4)),

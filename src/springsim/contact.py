@@ -8,8 +8,8 @@ How contact enters an integrator, and why:
    its sliding velocity with at most ``friction`` times that normal reaction. Friction is written as
    the tangential acceleration that would stop the sliding within the current step ``h``, clamped
    to the Coulomb cone: inside the cone the particle sticks (static friction, no creeping); outside
-   it slides with kinetic friction along -v_T. The formula never divides by |v_T|, so a particle at
-   rest is no special case. Because the reaction is a force, every stage sees it and the method
+   it slides with kinetic friction along -v_T (see ``coulomb_friction`` for the slow end of
+   sliding). Nothing divides by a zero |v_T|, so a particle at rest is no special case. Because the reaction is a force, every stage sees it and the method
    keeps its order away from impacts.
    A particle in the band that already moves away from the surface (v_N > 0) keeps the part of the
    push that stops it within the step: the reaction is -a_N - v_N / h, or none when that is
@@ -78,15 +78,32 @@ def apply_contact_forces(model, x, v, h, a):
             # tangential acceleration and tangential (sliding) velocity
             ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
             tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
-            # the friction that would stop the sliding within this step, clamped to the cone
-            sx, sy, sz = -(ax + tx / h), -(ay + ty / h), -(az + tz / h)
-            size = math.sqrt(sx * sx + sy * sy + sz * sz)
-            limit = friction[t] * reaction
-            scale = 1.0 if size <= limit else limit / size
+            fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
             a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
-            a[i, 0] = ax + scale * sx + a_normal * nx
-            a[i, 1] = ay + scale * sy + a_normal * ny
-            a[i, 2] = az + scale * sz + a_normal * nz
+            a[i, 0] = ax + fx + a_normal * nx
+            a[i, 1] = ay + fy + a_normal * ny
+            a[i, 2] = az + fz + a_normal * nz
+
+
+@kernel
+def coulomb_friction(ax, ay, az, tx, ty, tz, limit, h):
+    """Friction acceleration on a particle with tangential acceleration a_T and sliding velocity
+    v_T, at most ``limit`` (friction times the normal reaction, per unit mass).
+
+    Sticking: the acceleration that would stop the sliding within this step, -(a_T + v_T / h),
+    when the cone allows it. Sliding: ``limit`` along -v_T (Coulomb's kinetic friction) when even
+    that cannot stop the sliding within the step (|v_T| > limit h); below that speed the direction
+    of the end-of-step velocity -(a_T + v_T / h) is used instead, which does not flip from step to
+    step as the sliding stops. Never divides by a zero |v_T|.
+    """
+    sx, sy, sz = -(ax + tx / h), -(ay + ty / h), -(az + tz / h)
+    stick = math.sqrt(sx * sx + sy * sy + sz * sz)
+    if stick <= limit:
+        return sx, sy, sz
+    speed = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if speed > limit * h:
+        return -limit * tx / speed, -limit * ty / speed, -limit * tz / speed
+    return limit * sx / stick, limit * sy / stick, limit * sz / stick
 
 
 @kernel

@@ -23,8 +23,16 @@ class SimulationDiverged(RuntimeError):
         super().__init__(
             f"simulation diverged at t = {time:.6g} s (step {step}) with integrator "
             f"'{integrator}' and dt = {dt:g} s: particle {particle} near {where} has |v|^2 = "
-            f"{speed_squared:.3g} (limit 1e6). Try a smaller dt (for example {dt / 2:g}), a more "
-            f"stable integrator (rk4, or implicit_euler for large steps), or softer springs.")
+            f"{speed_squared:.3g} (limit 1e6). Try a smaller dt (for example {dt / 2:g}), "
+            f"{_more_stable(integrator)}, or softer springs.")
+
+
+def _more_stable(integrator: str) -> str:
+    if integrator == "implicit_euler":
+        return "more Newton iterations (implicit.newton_iterations)"
+    if integrator == "rk4":
+        return "implicit_euler (stable at large steps)"
+    return "a more stable integrator (rk4, or implicit_euler for large steps)"
 
 
 def require(condition: bool, key: str, value, allowed: str) -> None:

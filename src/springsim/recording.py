@@ -124,6 +124,8 @@ def frame_schedule(duration: float, fps: float, dt: float) -> np.ndarray:
     """The step count at each frame: frame k at time k/fps, rounded to a whole step."""
     require(math.isfinite(fps) and fps > 0, "fps", fps, "must be > 0 frames per simulated second")
     require(math.isfinite(duration) and duration >= 0, "duration", duration, "must be >= 0 s")
+    require(duration / dt < 2.0 ** 53, "dt", dt,
+            f"is too small for a {duration:g} s run (more than 2^53 steps): use a larger dt")
     intervals = math.floor(duration * fps + 1e-9)   # 1e-9: 8 s * 60 fps is 480 intervals
     times = np.arange(intervals + 1) / fps
     if duration - times[-1] > dt / 2:

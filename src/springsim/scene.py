@@ -55,14 +55,22 @@ def check_bodies_outside_terrains(model) -> None:
         x = model.initial_positions[body.start:body.stop]
         radii = model.arrays.radius[body.start:body.stop]
         for t, terrain in enumerate(model.terrains):
-            depth = -float(np.min(terrain.signed_distance(x, radii)))
-            require(depth <= 0, f"bodies.{body_index}.position", _position_of(model, body_index),
-                    f"puts the body {depth:.3g} m inside terrains.{t} "
+            distance = terrain.signed_distance(x, radii)
+            deepest = int(np.argmin(distance))
+            key, value = _placement(model.scene_bodies[body_index], f"bodies.{body_index}",
+                                    deepest)
+            require(distance[deepest] >= 0, key, value,
+                    f"puts the body {-distance[deepest]:.3g} m inside terrains.{t} "
                     f"({type(terrain).__name__}); move the body or the terrain")
 
 
-def _position_of(model, body_index):
-    return getattr(model.scene_bodies[body_index], "position", None)
+def _placement(spec, key: str, particle: int):
+    """The key and value that place a body's ``particle``: a ball's own position for a Balls
+    body (one particle per ball), else the body's position."""
+    balls = getattr(spec, "balls", None)
+    if balls is not None:
+        return f"{key}.balls.{particle}.position", balls[particle].position
+    return f"{key}.position", getattr(spec, "position", None)
 
 
 def _finite(value) -> bool:

@@ -38,8 +38,8 @@ class Simulation:
         self.scene = scene
         self.model = build_model(scene)
         check_bodies_outside_terrains(self.model)
-        self.integrator = get_integrator(scene.integrator,
-                                         **integrator_settings(scene, integrator_options))
+        self._integrator_options = integrator_settings(scene, integrator_options)
+        self.integrator = get_integrator(scene.integrator, **self._integrator_options)
         self.dt = float(scene.dt)
         self.state = State.initial(self.model)
         self.steps_taken = 0
@@ -80,5 +80,7 @@ class Simulation:
         return energies(self.model, self.state)
 
     def reset(self) -> None:
+        """Back to the initial state, with a fresh integrator (implicit ones remember contacts)."""
         self.state = State.initial(self.model)
         self.steps_taken = 0
+        self.integrator = get_integrator(self.scene.integrator, **self._integrator_options)

@@ -61,6 +61,9 @@ def run(args) -> int:
             check_output_path(option, path)
     if args.plot:
         plot_format(args.plot)
+    if args.video:
+        from ..render.video import output_format
+        output_format(args.video, key="--video")
 
     simulation = Simulation(scene)
     recording = record(simulation, scene.duration, args.fps, progress=not args.quiet)

@@ -8,11 +8,11 @@ from .backend import RenderUnavailable, capture, start_renderer
 from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_points, scene_points
 from .drawing import DrawOptions, SceneDrawing
 from .movie import draw_frame, render_video, write_video
-from .frames import simulate_frames, steps_per_frame
+from .frames import simulate_frames
 from .video import FrameWriter, output_format
 
 __all__ = ["write_video", "render_video", "draw_frame", "DrawOptions", "SceneDrawing",
            "Camera",
            "CAMERA_NAMES", "camera_path", "frame_points", "scene_points", "apply_camera",
            "start_renderer", "capture", "RenderUnavailable", "FrameWriter", "output_format",
-           "simulate_frames", "steps_per_frame"]
+           "simulate_frames"]

@@ -15,13 +15,14 @@ from ..errors import require
 FORMATS = ("mp4", "gif", "png folder")
 
 
-def output_format(path) -> str:
-    """``mp4``, ``gif`` or ``png folder`` (a path with no suffix, or an existing folder)."""
+def output_format(path, key: str = "out") -> str:
+    """``mp4``, ``gif`` or ``png folder`` (a path with no suffix, or an existing folder);
+    ``key`` names the option in the error."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".mp4", ".gif"):
         return suffix[1:]
-    require(suffix == "" or path.is_dir(), "out", str(path),
+    require(suffix == "" or path.is_dir(), key, str(path),
             "must end in .mp4 or .gif, or name a folder for PNG frames")
     return "png folder"
 
