@@ -1,7 +1,7 @@
 """Backward Euler (implicit_euler): its Jacobians against finite differences, the matrix and its
 conjugate-gradient solve against SciPy, convergence of the Newton iterations to the backward-Euler
-equations, energy, contact (no push into a terrain, Coulomb sliding, restitution), pins, and the
-large-step bars of the four jelly scenes at dt = 1/30 s."""
+equations, energy, contact (no push into a terrain, Coulomb sliding and sticking, restitution),
+pins, and the large-step bars of the four jelly scenes at dt = 1/30 s."""
 import numpy as np
 import pytest
 import scipy.sparse
@@ -12,7 +12,7 @@ from springsim import SceneError, Simulation
 from springsim.bodies.balls import Ball, Balls
 from springsim.bodies.cube import Cube
 from springsim.implicit.cg import filtered_cg
-from springsim.implicit.constraints import CONTACT, FREE, PINNED
+from springsim.implicit.constraints import CONTACT, FREE, PINNED, SLIP_SPEED
 from springsim.implicit.jacobian import assemble_system
 from springsim.implicit.pattern import build_block_pattern
 from springsim.integrators import get_integrator
@@ -164,6 +164,30 @@ def test_cg_leaves_the_normal_components_of_contacts_where_they_start():
     assert np.linalg.norm(residual) <= 1e-10 * np.linalg.norm(start_residual)
 
 
+def test_cg_has_nothing_to_solve_for_a_load_the_constraints_carry():
+    """b along the contact normals only, as under a resting body: filtering it leaves ~1e-17 of
+    rounding, which a goal relative to that starting residual would chase (to max_iterations,
+    or with huge steps along rounding into the contacts)."""
+    simulation = stiff_cube(perturb_seed=7)
+    arrays, count = simulation.model.arrays, simulation.model.particle_count
+    pattern = build_block_pattern(arrays)
+    blocks = np.empty((pattern.block_count, 3, 3))
+    assemble_system(arrays, pattern, simulation.positions, 1.0, H, H * H, blocks)
+    rng = np.random.default_rng(9)
+    kind = np.full(count, FREE, np.int8)
+    kind[::3] = CONTACT
+    normal = rng.standard_normal((count, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    b = np.where((kind == CONTACT)[:, None], rng.uniform(0.1, 1.0, (count, 1)) * normal, 0.0)
+    u = np.zeros((count, 3))
+    work = [np.zeros((count, 3)) for _ in range(4)]
+    iterations, reference = filtered_cg(pattern, blocks, b, kind, normal, u, 1e-5, 1000, 0.0,
+                                        *work)
+    assert iterations == 0
+    assert reference == pytest.approx(np.linalg.norm(b))
+    assert np.all(u == 0.0)
+
+
 def test_newton_iterations_converge_to_the_backward_euler_step():
     """The residual of M (v' - v) = h F(x + h v', v') shrinks with every Newton iteration."""
     residuals = []
@@ -306,6 +330,57 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
         assert depth <= 1e-9
         touched |= depth > -0.01
     assert touched
+
+
+def ball_on_the_tilted_plane(friction, dt):
+    """A 1 kg ball of radius 0.1 m touching the tilted plane (phi = 0, rounded up: 1e-17 m
+    inside, the scene would be refused), at rest."""
+    plane = tilted_plane(friction=friction)
+    radius = 0.1
+    offset = radius * SQRT_HALF
+    while plane.signed_distance(np.array([offset, offset, 0.0]), radius) < 0.0:
+        offset = np.nextafter(offset, 1.0)
+    ball = Ball(position=(offset, offset, 0.0), radius=radius, mass=1.0)
+    scene = Scene(name="ball", bodies=[Balls(balls=[ball])], terrains=[plane],
+                  gravity=EARTH_GRAVITY)
+    return Simulation(scene, integrator="implicit_euler", dt=dt), plane
+
+
+@pytest.mark.parametrize("dt", [0.01, H])
+def test_ball_that_friction_holds_on_a_slope_stays_put(dt):
+    """Friction 1.2 > tan 45: for 2 s the ball creeps no faster than SLIP_SPEED (regularized
+    friction, constraints.py), so it moves at most SLIP_SPEED * 2 s. Once, at some steps the
+    solve's rounding pushed it into the plane: the contact was released, friction was lost,
+    and the velocity jumped to g sin 45 dt."""
+    simulation, plane = ball_on_the_tilted_plane(1.2, dt)
+    start = simulation.positions.copy()
+    steps = round(2.0 / dt)
+    for _ in range(steps):
+        simulation.step(1)
+        assert np.linalg.norm(simulation.velocities) <= SLIP_SPEED
+    assert np.linalg.norm(simulation.positions - start) <= SLIP_SPEED * steps * dt
+    assert plane.signed_distance(simulation.positions, 0.1).min() > -1e-12
+
+
+@pytest.mark.parametrize("dt", [0.01, H])
+def test_ball_on_a_slope_slides_at_the_coulomb_acceleration(dt):
+    """Friction 0.3 < tan 45: the ball slides down at g (sin 45 - 0.3 cos 45), on the plane."""
+    simulation, plane = ball_on_the_tilted_plane(0.3, dt)
+    downhill = np.array([1.0, -1.0, 0.0]) * SQRT_HALF
+    expected = 9.8 * SQRT_HALF * (1.0 - 0.3)
+    simulation.step(1)
+    # constant forces: one backward Euler step is exact, but for the ball's drag (3.4e-4 N s/m)
+    assert np.allclose(simulation.velocities[0], expected * dt * downhill, rtol=0.0,
+                       atol=1e-5 * expected * dt)
+    first = simulation.velocities[0] @ downhill
+    steps = round(2.0 / dt) - 1
+    simulation.step(steps)
+    # 1%: the friction damper of a step comes from the last step's slip, slower by a dt, which
+    # adds up to ~0.3% too much friction (and the drag ~0.05%)
+    acceleration = (simulation.velocities[0] @ downhill - first) / (steps * dt)
+    assert acceleration == pytest.approx(expected, rel=0.01)
+    assert abs(simulation.velocities[0] @ plane.unit_normal()) < 1e-9
+    assert abs(simulation.velocities[0, 2]) == 0.0
 
 
 def test_restitution_reflects_the_approach_speed():

@@ -131,6 +131,14 @@ def hold_constrained(i, kind, normal, normal_floor, v, dv, ddv):
 
 
 @kernel
+def hold_all_constrained(kind, normal, normal_floor, v, dv, ddv):
+    """hold_constrained for every particle: after a solve, whose filtered steps leave rounding
+    in the components it must not change, so that no contact ends off its floor."""
+    for i in range(ddv.shape[0]):
+        hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
+
+
+@kernel
 def filter_constrained(kind, normal, u):
     """u = S u: remove the normal component of contacts and everything of pinned particles."""
     for i in range(u.shape[0]):

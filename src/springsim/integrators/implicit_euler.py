@@ -23,7 +23,7 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.cg import filtered_cg
-from ..implicit.constraints import (find_constraints, hold_constrained,
+from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     restore_impact_speeds, set_friction_damping, update_contacts)
 from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
                                  particle_mass)
@@ -57,6 +57,7 @@ def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, 
     Returns the conjugate-gradient iterations taken and the number of solves."""
     iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                         max_iterations, 0.0, r, s, c, q)
+    hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
     for update in range(MAX_CONTACT_UPDATES):
         block_multiply(pattern, blocks, ddv, q)
@@ -66,6 +67,7 @@ def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, 
             break
         more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
                                       max_iterations, reference, r, s, c, q)
+        hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
         solves += 1
     return iterations, solves
@@ -135,7 +137,8 @@ def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_it
 @register
 class ImplicitEuler(Integrator):
     """Options: ``newton_iterations`` (default 1: the Baraff-Witkin step), ``cg_tolerance``
-    (relative residual of each linear solve, default 1e-5) and ``cg_max_iterations``."""
+    (relative residual of each linear solve, against the larger of its starting residual and
+    its right-hand side, default 1e-5) and ``cg_max_iterations``."""
 
     name = "implicit_euler"
     order = 1
