@@ -1,4 +1,5 @@
-"""Errors a user can act on."""
+"""Errors a user can act on, and the checks that raise them."""
+import numpy as np
 
 
 class SceneError(ValueError):
@@ -33,6 +34,14 @@ def _more_stable(integrator: str) -> str:
     if integrator == "rk4":
         return "implicit_euler (stable at large steps)"
     return "a more stable integrator (rk4, or implicit_euler for large steps)"
+
+
+def is_finite(value) -> bool:
+    """True for a finite number or an array of finite numbers; False for anything else."""
+    try:
+        return bool(np.all(np.isfinite(np.asarray(value, float))))
+    except (TypeError, ValueError):
+        return False
 
 
 def require(condition: bool, key: str, value, allowed: str) -> None:

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import require
+from .errors import is_finite, require
 
 
 @dataclass
@@ -36,12 +36,12 @@ class Scene:
 
         require(self.integrator in integrator_names(), "integrator", self.integrator,
                 "must be one of " + ", ".join(integrator_names()))
-        require(_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")
-        require(_finite(self.duration) and self.duration >= 0, "duration", self.duration,
+        require(is_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")
+        require(is_finite(self.duration) and self.duration >= 0, "duration", self.duration,
                 "must be >= 0 s")
-        require(np.shape(self.gravity) == (3,) and _finite(self.gravity), "gravity",
+        require(np.shape(self.gravity) == (3,) and is_finite(self.gravity), "gravity",
                 self.gravity, "must be three finite numbers (m/s^2)")
-        require(_finite(self.drag) and self.drag >= 0, "drag", self.drag, "must be >= 0 N s/m")
+        require(is_finite(self.drag) and self.drag >= 0, "drag", self.drag, "must be >= 0 N s/m")
         require(len(self.bodies) > 0, "bodies", self.bodies, "a scene needs at least one body")
         for i, body in enumerate(self.bodies):
             body.validate(f"bodies.{i}")
@@ -71,10 +71,3 @@ def _placement(spec, key: str, particle: int):
     if balls is not None:
         return f"{key}.balls.{particle}.position", balls[particle].position
     return f"{key}.position", getattr(spec, "position", None)
-
-
-def _finite(value) -> bool:
-    try:
-        return bool(np.all(np.isfinite(np.asarray(value, float))))
-    except (TypeError, ValueError):
-        return False

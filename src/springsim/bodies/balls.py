@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-from ..errors import require
+from ..errors import is_finite, require
 from . import BuiltBody
 from .cloth import REFERENCE_DRAG
 
@@ -55,11 +55,11 @@ class Balls:
             _validate_ball(as_ball(ball, f"{key}.balls.{b}"), f"{key}.balls.{b}")
         for name in ("ball_restitution", "particle_restitution", "position_correction"):
             value = getattr(self, name)
-            require(_finite(value) and 0 <= value <= 1, f"{key}.{name}", value,
+            require(is_finite(value) and 0 <= value <= 1, f"{key}.{name}", value,
                     "must lie in [0, 1]")
         for name, unit in (("particle_friction", ""), ("drag", " N s/m")):
             value = getattr(self, name)
-            require(_finite(value) and value >= 0, f"{key}.{name}", value, f"must be >= 0{unit}")
+            require(is_finite(value) and value >= 0, f"{key}.{name}", value, f"must be >= 0{unit}")
 
     def build(self) -> BuiltBody:
         balls = [as_ball(ball, "balls") for ball in self.balls]
@@ -98,15 +98,8 @@ def collision_parameters(spec) -> dict:
 def _validate_ball(ball: Ball, key: str) -> None:
     for name in ("position", "velocity"):
         value = getattr(ball, name)
-        require(np.shape(value) == (3,) and _finite(value), f"{key}.{name}", value,
+        require(np.shape(value) == (3,) and is_finite(value), f"{key}.{name}", value,
                 "must be three finite numbers")
-    require(_finite(ball.radius) and ball.radius > 0, f"{key}.radius", ball.radius,
+    require(is_finite(ball.radius) and ball.radius > 0, f"{key}.radius", ball.radius,
             "must be > 0 m")
-    require(_finite(ball.mass) and ball.mass > 0, f"{key}.mass", ball.mass, "must be > 0 kg")
-
-
-def _finite(value) -> bool:
-    try:
-        return bool(np.all(np.isfinite(np.asarray(value, float))))
-    except (TypeError, ValueError):
-        return False
+    require(is_finite(ball.mass) and ball.mass > 0, f"{key}.mass", ball.mass, "must be > 0 kg")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import require
+from ..errors import is_finite, require
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
 from .cube import grid_triangles
@@ -63,21 +63,21 @@ class Cloth:
             value = getattr(self, name)
             require(_positive(value), f"{key}.{name}", value,
                     "must be > 0 " + ("kg" if name == "particle_mass" else "m"))
-        require(_finite(self.drag) and self.drag >= 0, f"{key}.drag", self.drag,
+        require(is_finite(self.drag) and self.drag >= 0, f"{key}.drag", self.drag,
                 "must be >= 0 N s/m")
         for name in ("position", "velocity", "rotation_axis"):
             value = getattr(self, name)
-            require(np.shape(value) == (3,) and _finite(value), f"{key}.{name}", value,
+            require(np.shape(value) == (3,) and is_finite(value), f"{key}.{name}", value,
                     "must be three finite numbers")
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
-        require(_finite(self.rotation_degrees), f"{key}.rotation_degrees",
+        require(is_finite(self.rotation_degrees), f"{key}.rotation_degrees",
                 self.rotation_degrees, "must be a finite angle in degrees")
         for kind in ("structural", "shear", "bend"):
             params = getattr(self, kind)
-            require(_finite(params.ks) and params.ks >= 0, f"{key}.{kind}.ks", params.ks,
+            require(is_finite(params.ks) and params.ks >= 0, f"{key}.{kind}.ks", params.ks,
                     "must be >= 0 N/m")
-            require(_finite(params.kd) and params.kd >= 0, f"{key}.{kind}.kd", params.kd,
+            require(is_finite(params.kd) and params.kd >= 0, f"{key}.{kind}.kd", params.kd,
                     "must be >= 0 N s/m")
         self._validate_pinned(key)
 
@@ -152,11 +152,4 @@ def _builds(params: SpringParameters) -> bool:
 
 
 def _positive(value) -> bool:
-    return _finite(value) and float(value) > 0
-
-
-def _finite(value) -> bool:
-    try:
-        return bool(np.all(np.isfinite(np.asarray(value, float))))
-    except (TypeError, ValueError):
-        return False
+    return is_finite(value) and float(value) > 0
