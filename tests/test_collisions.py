@@ -186,14 +186,19 @@ def test_the_four_balls_land_on_the_cloth_and_stay_on_it_for_3_s(integrator):
 # The largest stable time steps of the reference's table for cloth and balls.
 STABLE_DT = {"explicit_euler": 2e-4, "symplectic_euler": 2e-4, "midpoint": 2e-4, "rk4": 3e-4,
              "predict_reevaluate": 1e-4}
+# Backward Euler is stable far beyond them: ball-particle contacts are part of its solve
+# (implicit/ball_contact.py), so large steps must not let the ball through either.
+IMPLICIT_DT = {"implicit_euler": (5e-3, 1e-2, 1.0 / 60.0)}
+STEPS = ([(name, dt) for name, dt in STABLE_DT.items()]
+         + [(name, dt) for name, steps in IMPLICIT_DT.items() for dt in steps])
 
 
-@pytest.mark.parametrize("integrator", list(STABLE_DT))
+@pytest.mark.parametrize("integrator, dt", STEPS, ids=[f"{name}-{dt:.3g}" for name, dt in STEPS])
 @pytest.mark.parametrize("height, speed", [(2.5, 0.0), (1.0, 20.0)], ids=["dropped", "thrown"])
-def test_a_fast_ball_never_passes_through_the_cloth(integrator, height, speed):
+def test_a_fast_ball_never_passes_through_the_cloth(integrator, dt, height, speed):
     scene = springsim.load_scene("cloth-balls")
     scene.bodies[1].balls = [Ball(position=(0.1, height, -0.05), velocity=(0.0, -speed, 0.0))]
-    sim = springsim.Simulation(scene, integrator=integrator, dt=STABLE_DT[integrator])
+    sim = springsim.Simulation(scene, integrator=integrator, dt=dt)
     lowest = np.inf
     for _ in range(50):
         sim.advance(0.02)
@@ -201,6 +206,27 @@ def test_a_fast_ball_never_passes_through_the_cloth(integrator, height, speed):
         assert depth < 0.05 and height_above > 0.3
         lowest = min(lowest, sim.positions[-1, 1])
     assert lowest < -0.3   # it did hit the cloth and push it down
+
+
+@pytest.mark.parametrize("dt", [1e-2, 1.0 / 60.0])
+def test_backward_euler_ball_particle_contacts_conserve_momentum(dt):
+    """A 20 kg ball thrown at 10 m/s into a free 10 x 10 cloth (100 kg, springs, no pins, no
+    gravity, no drag): the contacts inside the solve push the ball as hard as the cloth, so the
+    momentum stays what it was while the ball loses most of its speed to the cloth."""
+    ball = Balls(balls=[Ball(position=(0.1, 1.0, -0.05), velocity=(1.0, -10.0, 0.5), mass=20.0)],
+                 drag=0.0)
+    cloth = Cloth(particles_per_edge=10, width=2.0, height=2.0, pinned="none", drag=0.0,
+                  velocity=(0.0, 1.0, 0.0))
+    sim = simulation(cloth, ball, integrator="implicit_euler", dt=dt)
+    mass = sim.model.mass
+    momentum0 = mass @ sim.velocities
+    scale = mass @ np.linalg.norm(sim.velocities, axis=1)
+    for _ in range(round(0.5 / dt)):
+        sim.step(1)
+        np.testing.assert_allclose(mass @ sim.velocities, momentum0, rtol=0, atol=1e-9 * scale)
+        depth, height = cloth_check(sim)
+        assert depth < 0.05 and height > 0.3
+    assert sim.velocities[-1, 1] > -1.0   # from -10 m/s: it pushed the cloth, and was pushed
 
 
 def test_balls_dropped_on_the_jelly_cube_land_on_top_of_it():

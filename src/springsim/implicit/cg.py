@@ -13,10 +13,26 @@ never below tolerance |b|: relative to the starting residual alone it is roundin
 solve starts at its answer (a held contact, whose friction damper cancels the load along the
 surface). The integrator also restores the constrained components after each solve
 (``constraints.hold_all_constrained``).
+
+Ball-particle contacts (ball_contact.py) are not in the fixed block pattern: ``system_multiply``
+adds their product to the assembled matrix's, and the Jacobi preconditioner their diagonal.
+``filtered_cg`` is the solve without them.
+
+Momentum: every spring, damper and contact term of A acts on its two particles with opposite
+signs, so the exact solution changes the momentum by the external impulses alone; the residual
+that the tolerance leaves does not (its sum over particles, ~tolerance |b|, is momentum gained or
+lost). When no particle is constrained, ``conserve_momentum`` follows each solve with a correction
+along the three rigid translations T (the Galerkin step u += T (T^T A T)^-1 T^T r, which can only
+lower the error's A-norm): it makes the residual sum to zero, so an unconstrained system
+conserves momentum to rounding. With pins or terrain contacts momentum is not conserved anyway,
+and the solve is left as it is.
 """
 import math
 
+import numpy as np
+
 from .._jit import kernel
+from .ball_contact import add_contact_diagonal, add_contact_product, no_ball_contacts
 from .constraints import filter_constrained
 from .jacobian import block_multiply
 
@@ -33,24 +49,51 @@ def dot(u, w):
 
 
 @kernel
-def precondition(pattern, blocks, r, out):
-    """out = r / diag(A), entry by entry (Jacobi)."""
-    for i in range(r.shape[0]):
+def system_multiply(pattern, blocks, contacts, u, out):
+    """out = A u: the assembled blocks and the active ball-particle contacts."""
+    block_multiply(pattern, blocks, u, out)
+    add_contact_product(contacts, u, out)
+
+
+@kernel
+def system_diagonal(pattern, blocks, contacts, diagonal):
+    """diagonal = the diagonal entries of A (blocks and contacts), shaped like u."""
+    for i in range(diagonal.shape[0]):
         slot = pattern.diagonal_slot[i]
         for c in range(3):
-            out[i, c] = r[i, c] / blocks[slot, c, c]
+            diagonal[i, c] = blocks[slot, c, c]
+    add_contact_diagonal(contacts, diagonal)
+
+
+@kernel
+def precondition(diagonal, r, out):
+    """out = r / diag(A), entry by entry (Jacobi)."""
+    for i in range(r.shape[0]):
+        for c in range(3):
+            out[i, c] = r[i, c] / diagonal[i, c]
 
 
 @kernel
 def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, reference_norm,
                 r, s, c, q):
-    """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass).
+    """``contact_cg`` for the assembled matrix alone (no ball-particle contacts)."""
+    return contact_cg(pattern, blocks, no_ball_contacts(), b, kind, normal, u, tolerance,
+                      max_iterations, reference_norm, r, s, c, q)
+
+
+@kernel
+def contact_cg(pattern, blocks, contacts, b, kind, normal, u, tolerance, max_iterations,
+               reference_norm, r, s, c, q):
+    """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass), A the
+    assembled blocks plus the active ``contacts`` (ball_contact.py).
 
     The reference is ``reference_norm`` if positive, else the larger of the starting residual
     |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. r, s, c, q are work arrays
     shaped like u. Returns (iterations, reference norm used).
     """
-    block_multiply(pattern, blocks, u, q)
+    diagonal = np.empty_like(u)
+    system_diagonal(pattern, blocks, contacts, diagonal)
+    system_multiply(pattern, blocks, contacts, u, q)
     for i in range(u.shape[0]):
         for k in range(3):
             r[i, k] = b[i, k] - q[i, k]
@@ -60,14 +103,14 @@ def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, 
     if not reference > 0.0:
         reference = max(math.sqrt(residual_squared), math.sqrt(dot(b, b)), MIN_REFERENCE)
     goal = (tolerance * reference) ** 2
-    precondition(pattern, blocks, r, s)
+    precondition(diagonal, r, s)
     filter_constrained(kind, normal, s)
     c[:] = s
     delta = dot(r, s)
     for iteration in range(max_iterations):
         if not residual_squared > goal:   # also stops on NaN, which the divergence check reports
             return iteration, reference
-        block_multiply(pattern, blocks, c, q)
+        system_multiply(pattern, blocks, contacts, c, q)
         filter_constrained(kind, normal, q)
         curvature = dot(c, q)
         if not curvature > 0.0:
@@ -78,7 +121,7 @@ def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, 
                 u[i, k] += alpha * c[i, k]
                 r[i, k] -= alpha * q[i, k]
         filter_constrained(kind, normal, r)   # q's rounding, kept out of the residual
-        precondition(pattern, blocks, r, s)
+        precondition(diagonal, r, s)
         filter_constrained(kind, normal, s)
         delta_new = dot(r, s)
         beta = delta_new / delta
@@ -88,3 +131,26 @@ def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, 
                 c[i, k] = s[i, k] + beta * c[i, k]
         residual_squared = dot(r, r)
     return max_iterations, reference
+
+
+@kernel
+def conserve_momentum(pattern, blocks, contacts, b, kind, u, q):
+    """If no particle is constrained, shift u by the uniform velocity change that leaves the
+    residual b - A u summing to zero in each direction (module doc); q is a work array."""
+    for i in range(kind.shape[0]):
+        if kind[i] != 0:   # constraints.FREE
+            return
+    system_multiply(pattern, blocks, contacts, u, q)
+    for c in range(3):
+        # T^T A T: springs and contacts cancel between their two particles, leaving the masses
+        # and drag; its off-diagonal entries are rounding and are left out
+        translated = 0.0
+        for slot in range(blocks.shape[0]):
+            translated += blocks[slot, c, c]
+        residual = 0.0
+        for i in range(u.shape[0]):
+            residual += b[i, c] - q[i, c]
+        if translated > 0.0:
+            shift = residual / translated
+            for i in range(u.shape[0]):
+                u[i, c] += shift

@@ -14,7 +14,14 @@ solved by Jacobi-preconditioned conjugate gradients. Each further Newton iterati
 matrix symmetric positive definite) in jacobian.py, the block sparsity pattern, fixed by the
 springs and built once per model, in pattern.py, the filtered solve in cg.py, and pinned
 particles and terrain contact (normal velocity floors, friction inside the solve, restitution)
-as constraints of the solve in constraints.py. After each step the impact pass and the
+as constraints of the solve in constraints.py, and ball-particle contact as stiff one-sided
+penalty springs of the solve in ball_contact.py: found each step for the pairs the step can bring
+together, added to the matrix-vector products of the solve (the pattern stays fixed), and kept
+or released between solves with the terrain contacts. Without them the solve would pull cloth
+into a ball faster than the post-step correction pushes it out, and at large steps a dropped or
+thrown ball would pass through the cloth. When nothing is constrained, each solve ends with a
+correction along the rigid translations that makes it conserve momentum to rounding, not just to
+the solve's tolerance (cg.py). After each step the impact and collision passes and the
 divergence check every integrator runs (``_steps.finish_step``).
 """
 import numpy as np
@@ -22,11 +29,12 @@ import numpy as np
 from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
-from ..implicit.cg import filtered_cg
+from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
+                                     update_ball_contacts)
+from ..implicit.cg import conserve_momentum, contact_cg, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     restore_impact_speeds, set_friction_damping, update_contacts)
-from ..implicit.jacobian import (add_stiffness_product, assemble_system, block_multiply,
-                                 particle_mass)
+from ..implicit.jacobian import add_stiffness_product, assemble_system, particle_mass
 from ..implicit.pattern import build_block_pattern
 from . import Integrator, register
 from ._steps import add_scaled, finish_step
@@ -50,23 +58,29 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
 
 
 @kernel
-def solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind, normal, terrain,
+def solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h, kind, normal, terrain,
                         normal_floor, friction_damping, ddv, tolerance, max_iterations,
                         reaction, r, s, c, q):
-    """Solve for ddv, updating contacts and friction between solves (implicit.constraints).
-    Returns the conjugate-gradient iterations taken and the number of solves."""
-    iterations, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
-                                        max_iterations, 0.0, r, s, c, q)
+    """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
+    ball-particle contacts (implicit.ball_contact) between solves. Returns the
+    conjugate-gradient iterations taken and the number of solves."""
+    iterations, reference = contact_cg(pattern, blocks, balls, rhs, kind, normal, ddv, tolerance,
+                                       max_iterations, 0.0, r, s, c, q)
+    conserve_momentum(pattern, blocks, balls, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
     for update in range(MAX_CONTACT_UPDATES):
-        block_multiply(pattern, blocks, ddv, q)
+        system_multiply(pattern, blocks, balls, ddv, q)
         add_scaled(reaction, q, -1.0, rhs)
-        if not update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
-                               terrain, normal_floor, friction_damping, reaction):
+        terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
+                                          normal, terrain, normal_floor, friction_damping,
+                                          reaction)
+        balls_changed = update_ball_contacts(balls, h, ddv, rhs) > 0
+        if not (terrain_changed or balls_changed):
             break
-        more, reference = filtered_cg(pattern, blocks, rhs, kind, normal, ddv, tolerance,
-                                      max_iterations, reference, r, s, c, q)
+        more, reference = contact_cg(pattern, blocks, balls, rhs, kind, normal, ddv, tolerance,
+                                     max_iterations, reference, r, s, c, q)
+        conserve_momentum(pattern, blocks, balls, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
         solves += 1
@@ -79,12 +93,14 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
     """One step; adds its conjugate-gradient iterations and linear solves to statistics."""
     blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q = work
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
+    balls = find_ball_contacts(model, x, v, h)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
     for newton in range(newton_iterations):
         assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
+        linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
         ddv[:] = 0.0
         for i in range(x.shape[0]):
             hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
@@ -92,10 +108,10 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
             friction_damping[i] = 0.0
             set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
                                  friction_damping)
-        iterations, solves = solve_with_contacts(model, pattern, blocks, rhs, x, v, dv, h, kind,
-                                                 normal, terrain, normal_floor, friction_damping,
-                                                 ddv, tolerance, max_iterations, reaction,
-                                                 r, s, c, q)
+        iterations, solves = solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h,
+                                                 kind, normal, terrain, normal_floor,
+                                                 friction_damping, ddv, tolerance,
+                                                 max_iterations, reaction, r, s, c, q)
         statistics[0] += iterations
         statistics[1] += solves
         add_scaled(dv, dv, 1.0, ddv)
