@@ -208,6 +208,22 @@ def test_a_fast_ball_never_passes_through_the_cloth(integrator, dt, height, spee
     assert lowest < -0.3   # it did hit the cloth and push it down
 
 
+@pytest.mark.parametrize("height, speed", [(2.5, 0.0), (1.0, 20.0)], ids=["dropped", "thrown"])
+def test_at_a_30_hz_step_newton_iterations_keep_even_the_fast_ball_out(height, speed):
+    """At dt = 1/30 s the 20 m/s ball moves 0.67 m, more than its radius, in one step: the contact
+    springs then need a relinearized solve (implicit.newton_iterations = 3) to hold it."""
+    scene = springsim.load_scene("cloth-balls", ["implicit.newton_iterations=3"])
+    scene.bodies[1].balls = [Ball(position=(0.1, height, -0.05), velocity=(0.0, -speed, 0.0))]
+    sim = springsim.Simulation(scene, integrator="implicit_euler", dt=1.0 / 30.0)
+    lowest = np.inf
+    for _ in range(45):
+        sim.step(1)
+        depth, height_above = cloth_check(sim)
+        assert depth < 0.05 and height_above > 0.3
+        lowest = min(lowest, sim.positions[-1, 1])
+    assert lowest < -0.3
+
+
 @pytest.mark.parametrize("dt", [1e-2, 1.0 / 60.0])
 def test_backward_euler_ball_particle_contacts_conserve_momentum(dt):
     """A 20 kg ball thrown at 10 m/s into a free 10 x 10 cloth (100 kg, springs, no pins, no
