@@ -209,17 +209,19 @@ def test_a_fast_ball_never_passes_through_the_cloth(integrator, dt, height, spee
 
 
 @pytest.mark.parametrize("height, speed", [(2.5, 0.0), (1.0, 20.0)], ids=["dropped", "thrown"])
-def test_at_a_30_hz_step_newton_iterations_keep_even_the_fast_ball_out(height, speed):
-    """At dt = 1/30 s the 20 m/s ball moves 0.67 m, more than its radius, in one step: the contact
-    springs then need a relinearized solve (implicit.newton_iterations = 3) to hold it."""
-    scene = springsim.load_scene("cloth-balls", ["implicit.newton_iterations=3"])
+@pytest.mark.parametrize("dt", [1.0 / 30.0, 0.05])
+def test_at_frame_steps_extra_newton_iterations_keep_even_the_fast_ball_out(height, speed, dt):
+    """At dt = 1/30 s the 20 m/s ball moves 0.67 m, more than its radius, in one step (1 m at
+    0.05 s): the contact normal turns within the step, and backward Euler relinearizes the contact
+    springs (more Newton iterations, chosen by the step itself) to hold it."""
+    scene = springsim.load_scene("cloth-balls")
     scene.bodies[1].balls = [Ball(position=(0.1, height, -0.05), velocity=(0.0, -speed, 0.0))]
-    sim = springsim.Simulation(scene, integrator="implicit_euler", dt=1.0 / 30.0)
+    sim = springsim.Simulation(scene, integrator="implicit_euler", dt=dt)
     lowest = np.inf
-    for _ in range(45):
+    for _ in range(int(1.5 / dt)):
         sim.step(1)
         depth, height_above = cloth_check(sim)
-        assert depth < 0.05 and height_above > 0.3
+        assert depth < 0.15 and height_above > 0.3   # a 0.67 to 1 m step may overlap briefly
         lowest = min(lowest, sim.positions[-1, 1])
     assert lowest < -0.3
 

@@ -30,7 +30,7 @@ from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import add_spring_forces
 from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
-                                     update_ball_contacts)
+                                     newton_iterations_needed, update_ball_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     restore_impact_speeds, set_friction_damping, update_contacts)
@@ -97,7 +97,7 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
-    for newton in range(newton_iterations):
+    for newton in range(newton_iterations_needed(model, balls, v, h, newton_iterations)):
         assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
         linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
