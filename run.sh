@@ -4,10 +4,5 @@
 # Extra arguments go to `springsim run` (e.g. ./run.sh --integrator midpoint).
 set -euo pipefail
 cd "$(dirname "$0")"
-if [ ! -x .venv/bin/springsim ] || [ pyproject.toml -nt .venv/.installed ]; then
-  python3 -m venv .venv
-  .venv/bin/pip install --quiet --upgrade pip
-  .venv/bin/pip install --quiet -e ".[test]"
-  touch .venv/.installed
-fi
+source scripts/ensure-venv.sh
 exec .venv/bin/springsim run jelly-plane --video jelly-plane.mp4 "$@"

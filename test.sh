@@ -3,10 +3,5 @@
 # Arguments go to pytest (e.g. ./test.sh -k friction).
 set -euo pipefail
 cd "$(dirname "$0")"
-if [ ! -x .venv/bin/pytest ] || [ pyproject.toml -nt .venv/.installed ]; then
-  python3 -m venv .venv
-  .venv/bin/pip install --quiet --upgrade pip
-  .venv/bin/pip install --quiet -e ".[test]"
-  touch .venv/.installed
-fi
+source scripts/ensure-venv.sh
 exec .venv/bin/python -m pytest "$@"

@@ -108,3 +108,10 @@ def test_too_few_particles_for_a_kind_is_a_scene_error(n, options, needs):
     assert error.value.key == "bodies.0.particles_per_edge"
     assert error.value.value == n
     assert needs in str(error.value)
+
+
+@pytest.mark.parametrize("kind", ["structural", "shear", "bend", "face"])
+def test_a_cube_refuses_a_spring_stiffness_that_is_not_a_finite_number(kind):
+    cube = Cube(**{kind: SpringParameters(ks=float("nan"), kd=60.0)})
+    with pytest.raises(SceneError, match=rf"bodies\.0\.{kind}\.ks = nan"):
+        cube.validate("bodies.0")

@@ -9,6 +9,8 @@ from enum import IntEnum
 
 import numpy as np
 
+from .errors import is_finite, require
+
 
 class SpringKind(IntEnum):
     STRUCTURAL = 0
@@ -30,6 +32,15 @@ class SpringParameters:
 
     ks: float
     kd: float
+
+    @property
+    def builds(self) -> bool:
+        """Whether a body builds springs of this kind (ks and kd both zero: none)."""
+        return self.ks > 0 or self.kd > 0
+
+    def validate(self, key: str) -> None:
+        require(is_finite(self.ks) and self.ks >= 0, f"{key}.ks", self.ks, "must be >= 0 N/m")
+        require(is_finite(self.kd) and self.kd >= 0, f"{key}.kd", self.kd, "must be >= 0 N s/m")
 
 
 def lattice_springs(index: np.ndarray, offset: tuple[int, ...]) -> np.ndarray:

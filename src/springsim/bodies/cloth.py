@@ -57,7 +57,7 @@ class Cloth:
         n = self.particles_per_edge
         require(isinstance(n, int) and n >= 2, f"{key}.particles_per_edge", n,
                 "needs an integer >= 2 (structural and shear springs join neighbours)")
-        require(n >= 3 or not _builds(self.bend), f"{key}.particles_per_edge", n,
+        require(n >= 3 or not self.bend.builds, f"{key}.particles_per_edge", n,
                 "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
         for name in ("width", "height", "particle_mass"):
             value = getattr(self, name)
@@ -74,11 +74,7 @@ class Cloth:
         require(is_finite(self.rotation_degrees), f"{key}.rotation_degrees",
                 self.rotation_degrees, "must be a finite angle in degrees")
         for kind in ("structural", "shear", "bend"):
-            params = getattr(self, kind)
-            require(is_finite(params.ks) and params.ks >= 0, f"{key}.{kind}.ks", params.ks,
-                    "must be >= 0 N/m")
-            require(is_finite(params.kd) and params.kd >= 0, f"{key}.{kind}.kd", params.kd,
-                    "must be >= 0 N s/m")
+            getattr(self, kind).validate(f"{key}.{kind}")
         self._validate_pinned(key)
 
     def _validate_pinned(self, key: str) -> None:
@@ -101,7 +97,7 @@ class Cloth:
         for kind, offsets, params in ((SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, self.structural),
                                       (SpringKind.SHEAR, SHEAR_OFFSETS, self.shear),
                                       (SpringKind.BEND, BEND_OFFSETS, self.bend)):
-            if not _builds(params):
+            if not params.builds:
                 continue
             for offset in offsets:
                 pairs = lattice_springs(index, offset)
@@ -145,10 +141,6 @@ class Cloth:
         mask = grid.ravel()
         mask[list(self.pinned)] = True
         return mask
-
-
-def _builds(params: SpringParameters) -> bool:
-    return params.ks > 0 or params.kd > 0
 
 
 def _positive(value) -> bool:

@@ -45,11 +45,11 @@ class Cube:
         n = self.particles_per_edge
         require(isinstance(n, int) and n >= 2, f"{key}.particles_per_edge", n,
                 "needs an integer >= 2 (structural and shear springs join neighbours)")
-        require(n >= 3 or not _builds(self.bend), f"{key}.particles_per_edge", n,
+        require(n >= 3 or not self.bend.builds, f"{key}.particles_per_edge", n,
                 "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
         # a face spring joins particle 0 to N-1: for N = 2 that is a structural spring, for
         # N = 3 a bend spring, and the same pair would be joined twice
-        require(n >= 4 or not (self.face_springs and _builds(self.face)),
+        require(n >= 4 or not (self.face_springs and self.face.builds),
                 f"{key}.particles_per_edge", n,
                 "needs >= 4 for face springs (below that they duplicate structural or bend "
                 "springs; or set face_springs = false)")
@@ -59,9 +59,7 @@ class Cube:
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
         for kind in ("structural", "shear", "bend", "face"):
-            params = getattr(self, kind)
-            require(params.ks >= 0, f"{key}.{kind}.ks", params.ks, "must be >= 0 N/m")
-            require(params.kd >= 0, f"{key}.{kind}.kd", params.kd, "must be >= 0 N s/m")
+            getattr(self, kind).validate(f"{key}.{kind}")
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
@@ -84,13 +82,13 @@ class Cube:
                   (SpringKind.BEND, BEND_OFFSETS, self.bend)]
         springs, kinds = [], []
         for kind, kind_offsets, params in groups:
-            if not _builds(params):
+            if not params.builds:
                 continue
             for offset in kind_offsets:
                 pairs = lattice_springs(index, offset)
                 springs.append(pairs)
                 kinds.append(np.full(len(pairs), kind, np.int8))
-        if self.face_springs and _builds(self.face):
+        if self.face_springs and self.face.builds:
             pairs = face_to_face_springs(index)
             springs.append(pairs)
             kinds.append(np.full(len(pairs), SpringKind.FACE, np.int8))
@@ -109,10 +107,6 @@ class Cube:
                                SpringKind.FACE: self.face},
             surface=cube_surface(index),
         )
-
-
-def _builds(params: SpringParameters) -> bool:
-    return params.ks > 0 or params.kd > 0
 
 
 def face_to_face_springs(index: np.ndarray) -> np.ndarray:
