@@ -3,7 +3,7 @@ the plain NumPy reference to round-off."""
 import numpy as np
 import pytest
 
-from springsim.forces import accelerations, forces
+from springsim.forces import accelerations, force_columns, forces
 from springsim.reference import reference_forces
 from springsim.springs import SpringParameters
 
@@ -67,7 +67,7 @@ def test_accelerations_without_terrain_are_force_over_mass(cube_simulation, name
     model = simulation.model
     x, v = random_state(simulation, 7)
     a = np.full_like(x, np.nan)  # every entry must be written
-    accelerations(model.arrays, x, v, 1e-3, a)
+    accelerations(model.arrays, x, v, 1e-3, a, force_columns(a))
     expected = reference_forces(model, x, v) * model.arrays.inv_mass[:, None]
     np.testing.assert_allclose(a, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
     assert np.all(a[model.pinned] == 0.0)
@@ -78,7 +78,7 @@ def test_gravity_alone_gives_g_and_drag_alone_gives_minus_c_v_over_m(cube_simula
                                  particle_mass=2.0)
     x, v = random_state(simulation, 3)
     a = np.empty_like(x)
-    accelerations(simulation.model.arrays, x, v, 1e-3, a)
+    accelerations(simulation.model.arrays, x, v, 1e-3, a, force_columns(a))
     np.testing.assert_allclose(a, np.asarray(EARTH_GRAVITY) - 0.5 * v / 2.0, rtol=1e-15,
                                atol=1e-15)
 

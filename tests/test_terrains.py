@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 import springsim
 from springsim.contact import terrain_distance
-from springsim.forces import accelerations
+from springsim.forces import accelerations, force_columns
 from springsim.terrains import Bowl, Plane, Sphere, tilted_plane
 
 INTEGRATORS = ["explicit_euler", "symplectic_euler", "midpoint", "rk4"]
@@ -56,7 +56,7 @@ def free_particles(cube_simulation, terrain, **options):
 
 def contact_acceleration(simulation, x, v, h=1e-3):
     a = np.full_like(x, np.nan)
-    accelerations(simulation.model.arrays, x, v, h, a)
+    accelerations(simulation.model.arrays, x, v, h, a, force_columns(a))
     return a
 
 

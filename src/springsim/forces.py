@@ -4,34 +4,45 @@ For a spring (a, b) with d = x_a - x_b, l = d / |d| and rest length r:
     spring  f_a = -ks (|d| - r) l
     damper  f_a = -kd ((v_a - v_b) . l) l
     f_b = -f_a
-plus gravity m g and viscous drag -c v on every particle.
+(springs.spring_force_factor), plus gravity m g and viscous drag -c v on every particle.
 """
-import math
-
 import numpy as np
 
 from ._jit import kernel
 from .contact import apply_contact_forces
+from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
+from .springs import spring_force_factor
 
 
 @kernel
-def add_spring_forces(model, x, v, force):
-    """Add the spring and damper force of every spring to both of its particles."""
+def force_columns(x):
+    """The work rows spring_forces needs for states shaped like x; allocate once per advance."""
+    return np.empty((COLUMNS, x.shape[0]))
+
+
+@kernel
+def spring_forces(model, x, v, columns, out):
+    """out = the spring and damper force on every particle (N).
+
+    The springs in runs (spring_runs.py) take the vectorized loop over columns; the few loose
+    springs take the plain loop below."""
+    to_columns(x, v, columns)
+    add_run_forces(model, columns)
+    from_columns(columns, out)
+    add_loose_spring_forces(model, x, v, out)
+
+
+@kernel
+def add_loose_spring_forces(model, x, v, force):
+    """Add the force of each loose spring (one in no run) to both of its particles."""
     springs, rest_length, group = model.springs, model.rest_length, model.spring_group
-    for s in range(springs.shape[0]):
+    for s in model.loose_springs:
         a, b = springs[s, 0], springs[s, 1]
         dx, dy, dz = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length == 0.0:
-            continue  # coincident particles: the direction is undefined, so no force
-        inverse_length = 1.0 / length
-        # along l = d / |d|: f_a = (-ks (|d| - r) - kd (v_a - v_b) . l) l
-        closing_speed = ((v[a, 0] - v[b, 0]) * dx + (v[a, 1] - v[b, 1]) * dy
-                         + (v[a, 2] - v[b, 2]) * dz) * inverse_length
-        g = group[s]
-        magnitude = -model.group_ks[g] * (length - rest_length[s]) - model.group_kd[g] * closing_speed
-        scale = magnitude * inverse_length
-        fx, fy, fz = scale * dx, scale * dy, scale * dz
+        factor = spring_force_factor(dx, dy, dz, v[a, 0] - v[b, 0], v[a, 1] - v[b, 1],
+                                     v[a, 2] - v[b, 2], rest_length[s],
+                                     model.group_ks[group[s]], model.group_kd[group[s]])
+        fx, fy, fz = factor * dx, factor * dy, factor * dz
         force[a, 0] += fx
         force[a, 1] += fy
         force[a, 2] += fz
@@ -41,14 +52,14 @@ def add_spring_forces(model, x, v, force):
 
 
 @kernel
-def accelerations(model, x, v, h, out):
+def accelerations(model, x, v, h, out, columns):
     """out = dv/dt at (x, v): internal and external forces over mass, then terrain contact.
 
     ``h`` is the step the integrator is taking; static friction uses it (see contact.py).
-    Pinned particles have zero inverse mass and so zero acceleration.
+    ``columns`` is work space from force_columns. Pinned particles have zero inverse mass and so
+    zero acceleration.
     """
-    out[:] = 0.0
-    add_spring_forces(model, x, v, out)
+    spring_forces(model, x, v, columns, out)
     inv_mass, gravity, drag = model.inv_mass, model.gravity, model.drag
     for i in range(x.shape[0]):
         w = inv_mass[i]
@@ -60,8 +71,8 @@ def accelerations(model, x, v, h, out):
 @kernel
 def forces(model, x, v):
     """Net force (N) on every particle before contact, for tests and diagnostics."""
-    out = np.zeros_like(x)
-    add_spring_forces(model, x, v, out)
+    out = np.empty_like(x)
+    spring_forces(model, x, v, force_columns(x), out)
     mass = np.zeros(x.shape[0])
     for i in range(x.shape[0]):
         if model.inv_mass[i] > 0.0:

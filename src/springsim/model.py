@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .bodies.balls import collision_parameters
+from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .terrains import pack_terrains
 
@@ -23,6 +24,9 @@ class ModelArrays(NamedTuple):
     spring_group: np.ndarray     # (S,) int16, row of the group tables below
     group_ks: np.ndarray         # (G,) N/m
     group_kd: np.ndarray         # (G,) N s/m
+    spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
+    run_rest_length: np.ndarray  # (E,) m, the runs' rest lengths; negative at a hole
+    loose_springs: np.ndarray    # (L,) int64 numbers of the springs in no run
     terrain_kind: np.ndarray     # (T,) PLANE, SPHERE or BOWL
     terrain_point: np.ndarray    # (T, 3) plane point or sphere centre
     terrain_normal: np.ndarray   # (T, 3) plane unit normal
@@ -110,6 +114,7 @@ def build_model(scene) -> Model:
         gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
+        **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius))
     bodies = tuple(BodySlice(getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{i}",
                              int(offsets[i]), int(offsets[i + 1]), b.surface + offsets[i])

@@ -7,8 +7,11 @@ A spring joins particles ``a`` and ``b`` with a rest length. Its stiffness ``ks`
 from dataclasses import dataclass
 from enum import IntEnum
 
+import math
+
 import numpy as np
 
+from ._jit import kernel
 from .errors import is_finite, require
 
 
@@ -41,6 +44,18 @@ class SpringParameters:
     def validate(self, key: str) -> None:
         require(is_finite(self.ks) and self.ks >= 0, f"{key}.ks", self.ks, "must be >= 0 N/m")
         require(is_finite(self.kd) and self.kd >= 0, f"{key}.kd", self.kd, "must be >= 0 N s/m")
+
+
+@kernel
+def spring_force_factor(dx, dy, dz, dvx, dvy, dvz, rest_length, ks, kd):
+    """The spring and damper force on a is this factor times d, for d = x_a - x_b and
+    dv = v_a - v_b. With the unit vector l = d / |d|,
+        f_a = (-ks (|d| - r) - kd dv . l) l = (-ks (|d| - r) - kd dv . l) / |d| * d,
+    and f_b = -f_a. Coincident particles have no direction, and no force."""
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    inverse_length = 1.0 / length if length > 0.0 else 0.0
+    closing_speed = (dvx * dx + dvy * dy + dvz * dz) * inverse_length
+    return (-ks * (length - rest_length) - kd * closing_speed) * inverse_length
 
 
 def lattice_springs(index: np.ndarray, offset: tuple[int, ...]) -> np.ndarray:

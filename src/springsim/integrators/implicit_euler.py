@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..errors import require, SceneError
-from ..forces import add_spring_forces
+from ..forces import force_columns, spring_forces
 from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
                                      newton_iterations_needed, update_ball_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, system_multiply
@@ -43,10 +43,9 @@ MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per 
 
 
 @kernel
-def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, rhs):
+def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
     """rhs = h F(x_k, v_k) - M dv_k, plus h^2 dF/dx v in the first iteration (dv_k = 0, x_k = x)."""
-    force[:] = 0.0
-    add_spring_forces(model, x_k, v_k, force)
+    spring_forces(model, x_k, v_k, columns, force)
     for i in range(x.shape[0]):
         w = model.inv_mass[i]
         m = particle_mass(w)
@@ -91,7 +90,7 @@ def solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h, kind, n
 def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
                         work, kind, terrain, normal_floor, friction_damping, statistics):
     """One step; adds its conjugate-gradient iterations and linear solves to statistics."""
-    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q = work
+    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns = work
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
     balls = find_ball_contacts(model, x, v, h)
     dv[:] = 0.0
@@ -99,7 +98,7 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
     v_k[:] = v
     for newton in range(newton_iterations_needed(model, balls, v, h, newton_iterations)):
         assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
-        newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, rhs)
+        newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
         linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
         ddv[:] = 0.0
         for i in range(x.shape[0]):
@@ -124,11 +123,13 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
 
 @kernel
 def workspace(pattern, x):
-    """The arrays a step works in: the matrix blocks and twelve vectors shaped like x."""
+    """The arrays a step works in: the matrix blocks, twelve vectors shaped like x and the
+    force columns."""
     blocks = np.empty((pattern.column.shape[0], 3, 3))
     vectors = [np.zeros_like(x) for _ in range(12)]
     return (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
-            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11])
+            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
+            force_columns(x))
 
 
 @kernel

@@ -6,17 +6,17 @@
 import numpy as np
 
 from .._jit import kernel
-from ..forces import accelerations
+from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, finish_step
 
 
 @kernel
-def midpoint_step(model, x, v, h, a, x_mid, v_mid):
-    accelerations(model, x, v, h, a)
+def midpoint_step(model, x, v, h, a, x_mid, v_mid, columns):
+    accelerations(model, x, v, h, a, columns)
     add_scaled(x_mid, x, h / 2, v)
     add_scaled(v_mid, v, h / 2, a)
-    accelerations(model, x_mid, v_mid, h, a)
+    accelerations(model, x_mid, v_mid, h, a, columns)
     add_scaled(x, x, h, v_mid)
     add_scaled(v, v, h, a)
 
@@ -24,8 +24,9 @@ def midpoint_step(model, x, v, h, a, x_mid, v_mid):
 @kernel
 def advance(model, x, v, h, steps):
     a, x_mid, v_mid = np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    columns = force_columns(x)
     for step in range(steps):
-        midpoint_step(model, x, v, h, a, x_mid, v_mid)
+        midpoint_step(model, x, v, h, a, x_mid, v_mid, columns)
         particle = finish_step(model, x, v)
         if particle >= 0:
             return step + 1, particle

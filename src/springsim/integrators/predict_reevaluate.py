@@ -11,17 +11,17 @@ explicit Euler's. Kept to compare with the course framework; ``implicit_euler`` 
 import numpy as np
 
 from .._jit import kernel
-from ..forces import accelerations
+from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, finish_step
 
 
 @kernel
-def predict_reevaluate_step(model, x, v, h, a, x_p, v_p):
-    accelerations(model, x, v, h, a)
+def predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns):
+    accelerations(model, x, v, h, a, columns)
     add_scaled(x_p, x, h, v)
     add_scaled(v_p, v, h, a)
-    accelerations(model, x_p, v_p, h, a)
+    accelerations(model, x_p, v_p, h, a, columns)
     add_scaled(x, x, h, v_p)
     add_scaled(v, v, h, a)
 
@@ -29,8 +29,9 @@ def predict_reevaluate_step(model, x, v, h, a, x_p, v_p):
 @kernel
 def advance(model, x, v, h, steps):
     a, x_p, v_p = np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    columns = force_columns(x)
     for step in range(steps):
-        predict_reevaluate_step(model, x, v, h, a, x_p, v_p)
+        predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns)
         particle = finish_step(model, x, v)
         if particle >= 0:
             return step + 1, particle

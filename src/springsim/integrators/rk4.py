@@ -9,29 +9,29 @@ stages accumulates in (dx, dv).
 import numpy as np
 
 from .._jit import kernel
-from ..forces import accelerations
+from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, finish_step
 
 
 @kernel
-def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv):
-    accelerations(model, x, v, h, a)          # k1 = (v, a)
+def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv, columns):
+    accelerations(model, x, v, h, a, columns)      # k1 = (v, a)
     dx[:] = v
     dv[:] = a
     add_scaled(x_k, x, h / 2, v)
     add_scaled(v_k, v, h / 2, a)
-    accelerations(model, x_k, v_k, h, a)      # k2 = (v_k, a)
+    accelerations(model, x_k, v_k, h, a, columns)  # k2 = (v_k, a)
     add_scaled(dx, dx, 2.0, v_k)
     add_scaled(dv, dv, 2.0, a)
     add_scaled(x_k, x, h / 2, v_k)
     add_scaled(v_k, v, h / 2, a)
-    accelerations(model, x_k, v_k, h, a)      # k3
+    accelerations(model, x_k, v_k, h, a, columns)  # k3
     add_scaled(dx, dx, 2.0, v_k)
     add_scaled(dv, dv, 2.0, a)
     add_scaled(x_k, x, h, v_k)
     add_scaled(v_k, v, h, a)
-    accelerations(model, x_k, v_k, h, a)      # k4
+    accelerations(model, x_k, v_k, h, a, columns)  # k4
     add_scaled(dx, dx, 1.0, v_k)
     add_scaled(dv, dv, 1.0, a)
     add_scaled(x, x, h / 6, dx)
@@ -42,8 +42,9 @@ def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv):
 def advance(model, x, v, h, steps):
     x_k, v_k, a = np.empty_like(x), np.empty_like(x), np.empty_like(x)
     dx, dv = np.empty_like(x), np.empty_like(x)
+    columns = force_columns(x)
     for step in range(steps):
-        rk4_step(model, x, v, h, x_k, v_k, a, dx, dv)
+        rk4_step(model, x, v, h, x_k, v_k, a, dx, dv, columns)
         particle = finish_step(model, x, v)
         if particle >= 0:
             return step + 1, particle
