@@ -2,13 +2,16 @@
 
     .venv/bin/python benchmarks/readme_table.py
 
-Each row is one `springsim bench ... --json` run in its own process (so that peak memory is the
-row's own); run it on a quiet machine.
+Each row is ``REPEATS`` runs of `springsim bench ... --json`, each in its own process (so that
+peak memory is the row's own); the table gives the run with the median speed and the range of
+all runs, since a shared machine's speed drifts by 10% or more from minute to minute.
 """
 import json
 import platform
 import subprocess
 import sys
+
+REPEATS = 3
 
 ROWS = [
     ("jelly-plane", "rk4", 0.001, [], "--seconds", "5"),
@@ -33,18 +36,27 @@ def bench(scene, integrator, dt, overrides, length_flag, length):
                                      text=True).stdout)
 
 
+def rate(run) -> str:
+    """Steps per second, to the step (with three digits below 100)."""
+    value = run["steps_per_second"]
+    return f"{value:,.0f}" if value >= 100 else f"{value:.3g}"
+
+
 def main():
     print(f"Machine: {platform.processor() or platform.machine()}, "
           f"{subprocess.run(['nproc'], capture_output=True, text=True).stdout.strip()} cores, "
           f"Python {platform.python_version()}")
-    print("| scene | integrator | dt (s) | particles | springs | steps/s | ms/step "
-          "| real-time factor | build (s) | peak memory (MB) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| scene | integrator | dt (s) | particles | springs | steps/s | range of "
+          f"{REPEATS} runs | ms/step | real-time factor | build (s) | peak memory (MB) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for scene, integrator, dt, overrides, flag, length in ROWS:
-        r = bench(scene, integrator, dt, overrides, flag, length)
+        runs = sorted((bench(scene, integrator, dt, overrides, flag, length)
+                       for _ in range(REPEATS)), key=lambda run: run["steps_per_second"])
+        r = runs[len(runs) // 2]
+        speeds = f"{rate(runs[0])} to {rate(runs[-1])}"
         label = scene + (" " + " ".join(overrides) if overrides else "")
         print(f"| {label} | {integrator} | {dt:g} | {r['particles']:,} | {r['springs']:,} "
-              f"| {r['steps_per_second']:,.0f} | {r['ms_per_step']:.3g} "
+              f"| {rate(r)} | {speeds} | {r['ms_per_step']:.3g} "
               f"| {r['real_time_factor']:.3g} | {r['build_seconds']:.3g} "
               f"| {r['peak_memory_mb']:,.0f} |", flush=True)
 
