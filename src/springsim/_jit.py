@@ -8,16 +8,20 @@ the divergence check reports) instead of a branch and an exception in every inne
 Numba invalidates a cached kernel only when the kernel's own file changes, not when a kernel it
 calls (in another file) does, so an edit to forces.py could leave rk4 running stale code. The cache
 therefore lives in a folder named after a hash of all of springsim's sources: any change to any
-file starts a fresh cache. Setting NUMBA_CACHE_DIR overrides this.
+file starts a fresh cache. Each import marks its folder as used, and folders of other versions
+left unused for STALE_DAYS are deleted. Setting NUMBA_CACHE_DIR overrides all of this.
 """
 import hashlib
 import os
+import shutil
+import time
 from pathlib import Path
 
 import numba
 from numba import njit
 
 FASTMATH_FLAGS = {"nsz", "arcp", "contract", "afn", "reassoc"}
+STALE_DAYS = 30
 
 
 def _source_fingerprint() -> str:
@@ -36,9 +40,26 @@ def _use_versioned_cache() -> None:
     folder = base / "springsim" / f"numba-{_source_fingerprint()}"
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        os.utime(folder)   # used now
     except OSError:
         return  # unwritable home: Numba falls back to __pycache__ beside the sources
     numba.config.CACHE_DIR = str(folder)
+    remove_stale_caches(folder.parent, keep=folder)
+
+
+def remove_stale_caches(parent: Path, keep: Path, now: float | None = None) -> list[Path]:
+    """Delete the numba-* folders in ``parent`` other than ``keep`` that no import has used
+    for STALE_DAYS (other versions' caches: about 15 MB each). Returns those deleted."""
+    cutoff = (time.time() if now is None else now) - STALE_DAYS * 86400
+    deleted = []
+    for folder in parent.glob("numba-*"):
+        try:
+            if folder != keep and folder.is_dir() and folder.stat().st_mtime < cutoff:
+                shutil.rmtree(folder)
+                deleted.append(folder)
+        except OSError:
+            continue   # in use or not ours to delete: leave it
+    return deleted
 
 
 _use_versioned_cache()
