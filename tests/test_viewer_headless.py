@@ -152,6 +152,9 @@ def test_record_button_writes_the_frames_on_screen_to_an_mp4(viewer, tmp_path):
     controls.choose_scene("jelly-plane")
     controls.start()
     viewer.recorder.folder = tmp_path
+    # a clock that advances one video frame per reading: one drawn frame, one video frame
+    ticks = iter(range(1000))
+    viewer.recorder.clock = lambda: next(ticks) / viewer.recorder.fps
     viewer.start_recording()
     viewer.run(frames=8)
     on_screen = capture()
