@@ -88,8 +88,8 @@ def test_forces_match_the_reference(name):
 
 
 def test_coincident_particles_exert_no_spring_force():
-    """All particles at one point: no spring has a direction, so only gravity acts (and no NaN
-    appears, neither from the springs nor from the holes of the runs)."""
+    """All particles at one point: no spring has a direction, so only gravity and drag act (and
+    no NaN appears, neither from the springs nor from the holes of the runs)."""
     model = build_model(SCENES["cube N=14 and a cloth"]())
     x = np.zeros_like(model.initial_positions)
     v = np.ones_like(x)
@@ -97,3 +97,18 @@ def test_coincident_particles_exert_no_spring_force():
     expected = model.mass[:, None] * model.arrays.gravity - model.arrays.drag[:, None] * v
     expected[model.pinned] = -model.arrays.drag[model.pinned, None] * v[model.pinned]
     np.testing.assert_array_equal(f, expected)
+
+
+@pytest.mark.parametrize("particle", [0, 21, 61])
+def test_a_non_finite_particle_reaches_only_its_spring_neighbours(particle):
+    """A hole joins two particles by no spring, so NaN must not cross it: the divergence check
+    names the first non-finite particle, and that must be where the trouble started."""
+    model = build_model(Scene(name="t", bodies=[Cube(particles_per_edge=4)]))
+    x = model.initial_positions.copy()
+    x[particle] = np.nan
+    f = forces(model.arrays, x, np.zeros_like(x))
+    springs = model.springs.astype(np.int64)
+    touching = springs[(springs == particle).any(axis=1)]
+    expected = np.zeros(model.particle_count, bool)
+    expected[touching.ravel()] = True
+    np.testing.assert_array_equal(~np.isfinite(f).all(axis=1), expected)

@@ -115,3 +115,22 @@ def test_a_cube_refuses_a_spring_stiffness_that_is_not_a_finite_number(kind):
     cube = Cube(**{kind: SpringParameters(ks=float("nan"), kd=60.0)})
     with pytest.raises(SceneError, match=rf"bodies\.0\.{kind}\.ks = nan"):
         cube.validate("bodies.0")
+
+
+def test_bodies_with_equal_parameters_share_their_groups():
+    """One row of the ks/kd tables per distinct (ks, kd), and every spring reads its own kind's
+    values from it."""
+    soft, stiff = SpringParameters(100.0, 1.0), SpringParameters(900.0, 4.0)
+    bodies = [Cube(particles_per_edge=3, position=(3.0 * k, 2.0, 0.0), structural=stiff,
+                   shear=soft, bend=soft) for k in range(3)]
+    bodies.append(Cube(particles_per_edge=3, position=(0.0, 6.0, 0.0), structural=soft,
+                       shear=SpringParameters(50.0, 0.5), bend=soft))
+    model = build_model(Scene(bodies=bodies))
+    arrays = model.arrays
+    assert sorted(zip(arrays.group_ks, arrays.group_kd)) == [(50.0, 0.5), (100.0, 1.0),
+                                                             (900.0, 4.0)]
+    expected_ks = np.where(model.spring_kind == SpringKind.STRUCTURAL, 900.0, 100.0)
+    last = model.springs[:, 0] >= model.bodies[3].start
+    expected_ks[last & (model.spring_kind == SpringKind.SHEAR)] = 50.0
+    expected_ks[last & (model.spring_kind == SpringKind.STRUCTURAL)] = 100.0
+    np.testing.assert_array_equal(arrays.group_ks[arrays.spring_group], expected_ks)

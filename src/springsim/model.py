@@ -21,7 +21,7 @@ class ModelArrays(NamedTuple):
     drag: np.ndarray             # (P,) viscous drag coefficient c (N s/m): f = -c v
     springs: np.ndarray          # (S, 2) uint32 particle numbers (unsigned: no wrap-around checks)
     rest_length: np.ndarray      # (S,) m
-    spring_group: np.ndarray     # (S,) int16, row of the group tables below
+    spring_group: np.ndarray     # (S,) int16, row of the group tables below (one per (ks, kd))
     group_ks: np.ndarray         # (G,) N/m
     group_kd: np.ndarray         # (G,) N s/m
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
@@ -90,17 +90,20 @@ def build_model(scene) -> Model:
     radius = np.concatenate([b.radii if b.radii is not None else np.zeros(len(b.masses))
                              for b in built])
 
-    group_ks, group_kd, springs, groups, kinds = [], [], [], [], []
+    # one parameter group per distinct (ks, kd): bodies alike share them, so that their springs
+    # can share runs (spring_runs.py) and a scene of many bodies keeps a small table
+    group_of, springs, groups, kinds = {}, [], [], []
     for body, start in zip(built, offsets):
         for kind, params in body.spring_parameters.items():
             members = body.spring_kind == kind
             if not members.any():
                 continue
+            group = group_of.setdefault((params.ks, params.kd), len(group_of))
             springs.append(body.springs[members] + np.int32(start))
-            groups.append(np.full(members.sum(), len(group_ks), np.int16))
+            groups.append(np.full(members.sum(), group, np.int16))
             kinds.append(body.spring_kind[members])
-            group_ks.append(params.ks)
-            group_kd.append(params.kd)
+    group_ks = [ks for ks, kd in group_of]
+    group_kd = [kd for ks, kd in group_of]
     springs = np.concatenate(springs) if springs else np.empty((0, 2), np.int32)
     groups = np.concatenate(groups) if groups else np.empty(0, np.int16)
     kinds = np.concatenate(kinds) if kinds else np.empty(0, np.int8)

@@ -111,8 +111,10 @@ def add_stretch_forces(columns, a, b, count, rest_length, ks, kd):
         dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
         factor = spring_force_factor(dx, dy, dz, vx_a[i] - vx_b[i], vy_a[i] - vy_b[i],
                                      vz_a[i] - vz_b[i], rest_length[i], ks, kd)
-        factor = factor if rest_length[i] >= 0.0 else 0.0   # a hole: no spring here
-        fx[i], fy[i], fz[i] = factor * dx, factor * dy, factor * dz
+        if rest_length[i] >= 0.0:
+            fx[i], fy[i], fz[i] = factor * dx, factor * dy, factor * dz
+        else:   # a hole: no spring, so no force (not even NaN from a non-finite end)
+            fx[i], fy[i], fz[i] = 0.0, 0.0, 0.0
         fx_a[i] += fx[i]
         fy_a[i] += fy[i]
         fz_a[i] += fz[i]

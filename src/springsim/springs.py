@@ -2,12 +2,11 @@
 
 A spring joins particles ``a`` and ``b`` with a rest length. Its stiffness ``ks`` (N/m) and damping
 ``kd`` (N s/m) are not stored per spring: each spring points into a small table of parameter groups
-(one per body and kind), which keeps a million-particle cube's 15.7 million springs in memory.
+(one per distinct ks and kd), which keeps a million-particle cube's 15.7 million springs in memory.
 """
+import math
 from dataclasses import dataclass
 from enum import IntEnum
-
-import math
 
 import numpy as np
 
