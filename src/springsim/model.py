@@ -26,7 +26,7 @@ class ModelArrays(NamedTuple):
     group_kd: np.ndarray         # (G,) N s/m
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
     run_rest_length: np.ndarray  # (E,) m, the runs' rest lengths; negative at a hole
-    loose_springs: np.ndarray    # (L,) int64 numbers of the springs in no run
+    loose_springs: np.ndarray    # (L,) uint32 numbers of the springs in no run
     terrain_kind: np.ndarray     # (T,) PLANE, SPHERE or BOWL
     terrain_point: np.ndarray    # (T, 3) plane point or sphere centre
     terrain_normal: np.ndarray   # (T, 3) plane unit normal

@@ -30,7 +30,7 @@ def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.nd
     start .. start + count - 1; holes negative) and ``loose_springs`` (spring numbers)."""
     if len(springs) == 0:
         return {"spring_runs": np.empty((0, 5), np.int64), "run_rest_length": np.empty(0),
-                "loose_springs": np.empty(0, np.int64)}
+                "loose_springs": np.empty(0, np.uint32)}
     a = np.minimum(springs[:, 0], springs[:, 1]).astype(np.int64)
     offset = np.abs(springs[:, 1].astype(np.int64) - springs[:, 0].astype(np.int64))
     order = np.lexsort((a, group, offset))
@@ -59,7 +59,7 @@ def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.nd
     run_rest_length[start[run] + a[member] - first[run]] = rest_length[order[member]]
     loose = np.r_[loose, order[~member]]
     return {"spring_runs": runs.reshape(-1, 5).astype(np.int64), "run_rest_length": run_rest_length,
-            "loose_springs": np.sort(loose).astype(np.int64)}
+            "loose_springs": np.sort(loose).astype(np.uint32)}   # unsigned: no wrap-around checks
 
 
 @kernel
