@@ -3,6 +3,6 @@
 if [ ! -x .venv/bin/springsim ] || [ ! -x .venv/bin/pytest ] || [ pyproject.toml -nt .venv/.installed ]; then
   python3 -m venv .venv
   .venv/bin/pip install --quiet --upgrade pip
-  .venv/bin/pip install --quiet -e ".[test]"
+  .venv/bin/pip install --quiet -e ".[all,test]"
   touch .venv/.installed
 fi
