@@ -319,7 +319,8 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
     scene = Scene(name="throw", bodies=[cube], terrains=[terrain], gravity=EARTH_GRAVITY)
     simulation = Simulation(scene, integrator="implicit_euler", dt=H)
     arrays = simulation.model.arrays
-    pattern, contacts = simulation.integrator.prepared(simulation.model)
+    pattern = simulation.integrator.pattern(simulation.model)
+    contacts = simulation.state.contacts
     work = workspace(pattern, simulation.positions)
     statistics = np.zeros(2, np.int64)
     touched = False

@@ -80,7 +80,7 @@ class Simulation:
         return energies(self.model, self.state)
 
     def reset(self) -> None:
-        """Back to the initial state, with a fresh integrator (implicit ones remember contacts)."""
+        """Back to the initial state (its contact memory included), with a fresh integrator."""
         self.state = State.initial(self.model)
         self.steps_taken = 0
         self.integrator = get_integrator(self.scene.integrator, **self._integrator_options)

@@ -177,24 +177,21 @@ class ImplicitEuler(Integrator):
         self.cg_max_iterations = int(cg_max_iterations)
         # running totals, for diagnostics: conjugate-gradient iterations, linear solves
         self.statistics = np.zeros(2, np.int64)
-        self._model = self._pattern = self._contacts = None
+        self._model = self._pattern = None
 
-    def prepared(self, model):
-        """The model's block pattern and contact memory, built on first use and kept for as
-        long as the model (a Simulation keeps one model)."""
+    def pattern(self, model):
+        """The model's block sparsity pattern, built on first use and kept for as long as the
+        model (a Simulation keeps one model)."""
         if self._model is not model:
-            count = model.particle_count
             self._model = model
             self._pattern = build_block_pattern(model.arrays)
-            self._contacts = (np.zeros(count, np.int8), np.full(count, -1, np.int64),
-                              np.zeros(count), np.zeros(count))
-        return self._pattern, self._contacts
+        return self._pattern
 
     def advance(self, model, state, dt, steps):
-        pattern, contacts = self.prepared(model)
-        done, particle = advance(model.arrays, pattern, state.positions, state.velocities,
-                                 float(dt), int(steps), self.newton_iterations,
-                                 self.cg_tolerance, self.cg_max_iterations, *contacts,
+        # the contacts carried between steps live in the state (state.ContactMemory)
+        done, particle = advance(model.arrays, self.pattern(model), state.positions,
+                                 state.velocities, float(dt), int(steps), self.newton_iterations,
+                                 self.cg_tolerance, self.cg_max_iterations, *state.contacts,
                                  self.statistics)
         return int(done), int(particle)
 
