@@ -46,12 +46,14 @@ class ModelArrays(NamedTuple):
 
 @dataclass(frozen=True)
 class BodySlice:
-    """Where one body's particles lie in the model, and its surface triangles (global numbers)."""
+    """Where one body's particles lie in the model, and its surface triangles: global particle
+    numbers, or rows of the embedded vertices when ``embedding`` is set (surfaces.py)."""
 
     name: str
     start: int
     stop: int
     surface: np.ndarray
+    embedding: object = None   # surfaces.Embedding or None
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ from .integrators import get_integrator
 from .model import build_model
 from .scene import check_bodies_outside_terrains
 from .state import State
+from .surfaces import body_surface
 
 
 def integrator_settings(scene, overrides: dict) -> dict:
@@ -74,6 +75,11 @@ class Simulation:
         """Simulate ``seconds`` more (rounded to whole steps)."""
         require(seconds >= 0, "seconds", seconds, "must be >= 0")
         self.step(int(round(seconds / self.dt)))
+
+    def surfaces(self) -> list:
+        """Each body's surface at the current state: ``surfaces.Surface`` with ``.name``,
+        ``.vertices`` (V, 3) and ``.triangles`` (T, 3)."""
+        return [body_surface(body, self.state.positions) for body in self.model.bodies]
 
     def energy(self) -> dict:
         """Kinetic, gravitational, spring and total energy (J) of the current state."""
