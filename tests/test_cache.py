@@ -1,9 +1,11 @@
-"""The compiled-kernel cache: other versions' folders are deleted once unused for STALE_DAYS,
-the current one and recently used ones are kept."""
+"""The compiled-kernel cache: its folder is named after the kernel sources only; other versions'
+folders are deleted once unused for STALE_DAYS, the current one and recently used ones are kept."""
 import os
+import shutil
 import time
 
-from springsim._jit import STALE_DAYS, remove_stale_caches
+from springsim._jit import PACKAGE, STALE_DAYS, kernel_sources, remove_stale_caches, \
+    source_fingerprint
 
 
 def test_only_other_versions_unused_for_stale_days_are_deleted(tmp_path):
@@ -20,3 +22,39 @@ def test_only_other_versions_unused_for_stale_days_are_deleted(tmp_path):
     assert deleted == [tmp_path / "numba-old"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["not-a-cache", "numba-current",
                                                           "numba-recent"]
+
+
+def _edited(package, relative: str) -> str:
+    """The fingerprint after appending a comment to one file of a copy of the package."""
+    with open(package / relative, "a") as file:
+        file.write("\n# edited\n")
+    return source_fingerprint(package)
+
+
+def test_only_kernel_sources_name_the_cache(tmp_path):
+    package = tmp_path / "springsim"
+    shutil.copytree(PACKAGE, package, ignore=shutil.ignore_patterns("__pycache__"))
+    original = source_fingerprint(package)
+    assert original == source_fingerprint(PACKAGE)   # names relative to the package
+    # modules no kernel depends on: the compiled kernels stay valid
+    for relative in ("cli.py", "commands/run.py", "recording.py", "simulation.py",
+                     "viewer/controls.py", "scene.py"):
+        assert _edited(package, relative) == original, relative
+    # a kernel's own file, a file whose kernels another file calls (forces.py: every
+    # integrator), and a module whose constants kernels compile in (terrains.PLANE, via
+    # contact.py): each gives a fresh cache
+    terrains = "terrains.py" if (package / "terrains.py").is_file() else "terrains/__init__.py"
+    for relative in ("integrators/rk4.py", "forces.py", terrains):
+        changed = _edited(package, relative)
+        assert changed != original, relative
+        original = changed
+    # a new module with kernels counts from the start
+    (package / "new_kernels.py").write_text("from ._jit import kernel\n")
+    assert source_fingerprint(package) != original
+
+
+def test_kernel_sources_are_the_kernel_modules_and_their_imports():
+    names = {path.relative_to(PACKAGE).as_posix() for path in kernel_sources()}
+    assert {"_jit.py", "forces.py", "contact.py", "integrators/rk4.py",
+            "integrators/implicit_euler.py", "implicit/constraints.py"} <= names
+    assert not names & {"cli.py", "simulation.py", "recording.py", "commands/run.py"}

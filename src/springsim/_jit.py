@@ -6,13 +6,18 @@ a diverging simulation. ``error_model="numpy"`` lets a division by zero give inf
 the divergence check reports) instead of a branch and an exception in every inner loop.
 
 Numba invalidates a cached kernel only when the kernel's own file changes, not when a kernel it
-calls (in another file) does, so an edit to forces.py could leave rk4 running stale code. The cache
-therefore lives in a folder named after a hash of all of springsim's sources: any change to any
-file starts a fresh cache. Each import marks its folder as used, and folders of other versions
-left unused for STALE_DAYS are deleted. Setting NUMBA_CACHE_DIR overrides all of this.
+calls (in another file) does, nor a constant it reads from another module (compiled in as a
+literal), so an edit to forces.py could leave rk4 running stale code. The cache therefore lives in
+a folder named after a hash of the kernel sources (``kernel_sources``): the modules that import
+this one, and every springsim module they import, transitively. Editing any of them starts a fresh
+cache; editing the rest (the command line, the viewer, recording) keeps the compiled kernels. Each
+import marks its folder as used, and folders of other versions left unused for STALE_DAYS are
+deleted. Setting NUMBA_CACHE_DIR overrides all of this.
 """
+import ast
 import hashlib
 import os
+import re
 import shutil
 import time
 from pathlib import Path
@@ -24,20 +29,68 @@ FASTMATH_FLAGS = {"nsz", "arcp", "contract", "afn", "reassoc"}
 STALE_DAYS = 30
 
 
-def _source_fingerprint() -> str:
-    package = Path(__file__).parent
+PACKAGE = Path(__file__).parent
+# a module that imports this one defines kernels (``from .._jit import kernel``)
+_IMPORTS_JIT = re.compile(rb"^\s*(from\s+[\w.]*_jit\s+import|import\s+[\w.]*_jit\b)", re.M)
+
+
+def source_fingerprint(package: Path = PACKAGE) -> str:
+    """A hash of the kernel sources' names and contents: it changes when a kernel may."""
     digest = hashlib.sha256()
-    for path in sorted(package.rglob("*.py")):
+    for path in kernel_sources(package):
         digest.update(path.relative_to(package).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
+
+
+def kernel_sources(package: Path = PACKAGE) -> list[Path]:
+    """The modules that define kernels, with every module of ``package`` they import at their
+    top level, transitively (the kernels they call and the constants they read), sorted."""
+    pending = [path for path in package.rglob("*.py") if _IMPORTS_JIT.search(path.read_bytes())]
+    found = set(pending)
+    while pending:
+        for imported in _package_imports(pending.pop(), package):
+            if imported not in found:
+                found.add(imported)
+                pending.append(imported)
+    return sorted(found)
+
+
+def _package_imports(path: Path, package: Path) -> list[Path]:
+    """The files of ``package`` that ``path`` imports at its top level (relative imports, or
+    absolute ones naming the package)."""
+    here = path.parent.relative_to(package).parts
+    modules = []
+    for node in ast.parse(path.read_bytes()).body:
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = here[:len(here) - (node.level - 1)] if node.level > 1 else here
+                parts = base + tuple((node.module or "").split(".")) if node.module else base
+            elif (node.module or "").split(".")[0] == package.name:
+                parts = tuple(node.module.split(".")[1:])
+            else:
+                continue
+            modules.append(parts)
+            modules += [parts + (alias.name,) for alias in node.names]   # submodules by name
+        elif isinstance(node, ast.Import):
+            modules += [tuple(alias.name.split(".")[1:]) for alias in node.names
+                        if alias.name.split(".")[0] == package.name]
+    return [file for parts in modules if (file := _module_file(package, parts)) is not None]
+
+
+def _module_file(package: Path, parts: tuple) -> Path | None:
+    folder = package.joinpath(*parts)
+    for file in (folder.with_suffix(".py") if parts else None, folder / "__init__.py"):
+        if file is not None and file.is_file():
+            return file
+    return None
 
 
 def _use_versioned_cache() -> None:
     if os.environ.get("NUMBA_CACHE_DIR"):
         return
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    folder = base / "springsim" / f"numba-{_source_fingerprint()}"
+    folder = base / "springsim" / f"numba-{source_fingerprint()}"
     try:
         folder.mkdir(parents=True, exist_ok=True)
         os.utime(folder)   # used now
