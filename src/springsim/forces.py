@@ -59,13 +59,19 @@ def accelerations(model, x, v, h, out, columns):
     ``columns`` is work space from force_columns. Pinned particles have zero inverse mass and so
     zero acceleration.
     """
+    free_accelerations(model, x, v, out, columns)
+    apply_contact_forces(model, x, v, h, out)
+
+
+@kernel
+def free_accelerations(model, x, v, out, columns):
+    """out = dv/dt at (x, v) before terrain contact: springs, dampers, drag and gravity."""
     spring_forces(model, x, v, columns, out)
     inv_mass, gravity, drag = model.inv_mass, model.gravity, model.drag
     for i in range(x.shape[0]):
         w = inv_mass[i]
         for c in range(3):
             out[i, c] = w * (out[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
-    apply_contact_forces(model, x, v, h, out)
 
 
 @kernel
