@@ -92,23 +92,31 @@ class Recording:
         return cls(**values)
 
 
-def record(simulation, duration: float, fps: float, progress: bool = False) -> Recording:
+def record(simulation, duration: float, fps: float, progress: bool = False, on_frame=None,
+           start=None) -> Recording:
     """Run ``simulation`` for ``duration`` s, keeping a frame every 1/fps s.
 
     ``progress`` shows a tqdm bar on stderr when stderr is a terminal; it disappears when done,
-    so that an error (a diverged simulation) is the only line left.
+    so that an error (a diverged simulation) is the only line left. ``on_frame(recording,
+    frame)`` is called after each frame is captured (checkpoints). ``start`` continues a
+    recording: ``(recording, first frame still to record)``, with the simulation at the state of
+    the frame before (checkpoint.Resumed.start).
     """
     from tqdm import tqdm
 
     frame_steps = frame_schedule(duration, fps, simulation.dt)
     check_memory(len(frame_steps), simulation.model.particle_count, fps)
-    recording = Recording.empty(simulation, len(frame_steps), fps)
-    recording.capture(0, simulation)
+    if start is None:
+        recording, first = Recording.empty(simulation, len(frame_steps), fps), 1
+        recording.capture(0, simulation)
+    else:
+        recording, first = start
     simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
-    started = time.perf_counter()
-    with tqdm(total=int(frame_steps[-1]), unit="step", desc=simulation.scene.name, leave=False,
-              file=sys.stderr, disable=None if progress else True) as bar:
-        for frame in range(1, len(frame_steps)):
+    started = time.perf_counter() - recording.wall_seconds
+    with tqdm(total=int(frame_steps[-1]), initial=int(frame_steps[first - 1]), unit="step",
+              desc=simulation.scene.name, leave=False, file=sys.stderr,
+              disable=None if progress else True) as bar:
+        for frame in range(first, len(frame_steps)):
             count = int(frame_steps[frame] - frame_steps[frame - 1])
             step_started = time.perf_counter()
             simulation.step(count)
@@ -116,6 +124,8 @@ def record(simulation, duration: float, fps: float, progress: bool = False) -> R
             recording.steps += count
             recording.capture(frame, simulation)
             bar.update(count)
+            if on_frame is not None:
+                on_frame(recording, frame)
     recording.wall_seconds = time.perf_counter() - started
     return recording
 

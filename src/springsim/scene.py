@@ -33,7 +33,9 @@ class Scene:
 
     def validate(self) -> None:
         from .integrators import integrator_names
+        from .scenefile import check_values
 
+        check_values(self)   # kinds and finite numbers, as a scene file's values are checked
         require(self.integrator in integrator_names(), "integrator", self.integrator,
                 "must be one of " + ", ".join(integrator_names()))
         require(is_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")

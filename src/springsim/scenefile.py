@@ -262,7 +262,7 @@ def _scalar(value, kind: type, key: str):
     elif kind is int:
         require(_is_integer(value), key, value, "must be a whole number (no decimal point)")
     elif kind is float:
-        require(_is_number(value) and math.isfinite(value), key, value, "must be a finite number")
+        require(_is_finite_number(value), key, value, "must be a finite number")
     else:
         require(isinstance(value, str), key, value, "must be a string (in quotes)")
     return kind(value)
@@ -336,6 +336,35 @@ def _like_default(value, default, container, key: str):
 def _plain_list(value, key: str) -> list:
     require(isinstance(value, list) and all(_is_plain(item) for item in value), key, value,
             "must be an array of numbers, booleans or strings")
+    return value
+
+
+# --- scenes built in Python: the same checks as a scene file's values ----------------------------
+
+def check_values(node, prefix: str = "") -> None:
+    """Check every value of a dataclass built in Python (a Scene, a body, a terrain) as a scene
+    file's value is checked (its kind; a float finite), so that the Python API refuses what a
+    scene file refuses, with the same one-line SceneError."""
+    for name, field in init_fields(type(node)).items():
+        value, key = getattr(node, name), _join(prefix, name)
+        if dataclasses.is_dataclass(value):
+            check_values(value, key)
+        elif _is_table_list(value):
+            for i, item in enumerate(value):
+                check_values(item, f"{key}.{i}")
+        else:
+            convert_field(type(node), field, _as_toml(value), MISSING, key)
+
+
+def _as_toml(value):
+    """A Python value as TOML would give it: sequences as lists, NumPy scalars as numbers,
+    dataclasses as tables."""
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return [_as_toml(item) for item in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {name: _as_toml(getattr(value, name)) for name in init_fields(type(value))}
     return value
 
 
@@ -468,7 +497,10 @@ def _is_number(value) -> bool:
 
 
 def _is_finite_number(value) -> bool:
-    return _is_number(value) and math.isfinite(value)
+    try:
+        return _is_number(value) and math.isfinite(value)
+    except OverflowError:   # an int too large for a float (from Python, not TOML)
+        return False
 
 
 def _is_integer(value) -> bool:

@@ -1,15 +1,26 @@
-"""Simulation: a model, a state and an integrator, advanced in whole steps."""
+"""Simulation: a model, a state and an integrator, advanced in whole steps.
+
+Every public method checks its arguments and the state's arrays before any compiled call, so
+misuse is a one-line SceneError naming the argument, never a Numba typing error or a write past
+the end of an array.
+"""
+import copy
 import math
+import numbers
 
 import numpy as np
 
 from .energy import energies
-from .errors import SimulationDiverged, require
+from .errors import SceneError, SimulationDiverged, require
 from .integrators import get_integrator
 from .model import build_model
-from .scene import check_bodies_outside_terrains
+from .scene import Scene, check_bodies_outside_terrains
 from .state import State
 from .surfaces import body_surface
+
+# The most steps one call may take: time advances by steps * dt in float64, exact in whole steps
+# up to 2^53 (and an int64 step counter holds that with room to spare).
+MAX_STEPS = 2 ** 53
 
 
 def integrator_settings(scene, overrides: dict) -> dict:
@@ -27,13 +38,23 @@ class Simulation:
 
     Both default to the scene's own. ``integrator_options`` go to the integrator and win over the
     scene's ``implicit`` settings (for example ``newton_iterations=2`` for implicit_euler).
+    The simulation works on its own copy of ``scene`` (``self.scene``): the caller's is never
+    changed.
     """
 
     def __init__(self, scene, integrator: str | None = None, dt: float | None = None,
                  **integrator_options):
+        if isinstance(scene, (str, bytes)) or hasattr(scene, "__fspath__"):
+            raise SceneError("scene", str(scene), "is a name or a file, not a Scene: load it "
+                             f"first, Simulation(springsim.load_scene({str(scene)!r}))")
+        require(isinstance(scene, Scene), "scene", type(scene).__name__,
+                "must be a springsim Scene (springsim.load_scene gives one)")
+        scene = copy.deepcopy(scene)
         if integrator is not None:
             scene.integrator = integrator
         if dt is not None:
+            require(_is_finite_number(dt) and dt > 0, "dt", dt,
+                    "must be a time step > 0 s (a finite number)")
             scene.dt = dt
         scene.validate()
         self.scene = scene
@@ -43,7 +64,15 @@ class Simulation:
         self.integrator = get_integrator(scene.integrator, **self._integrator_options)
         self.dt = float(scene.dt)
         self.state = State.initial(self.model)
-        self.steps_taken = 0
+
+    @property
+    def steps_taken(self) -> int:
+        """Steps taken from the initial state to the current one (kept in the state)."""
+        return self.state.steps
+
+    @steps_taken.setter
+    def steps_taken(self, count: int) -> None:
+        self.state.steps = count
 
     @property
     def positions(self) -> np.ndarray:
@@ -59,11 +88,14 @@ class Simulation:
 
     def step(self, count: int = 1) -> None:
         """Take ``count`` steps of size dt in one compiled call."""
-        require(self.dt > 0 and math.isfinite(self.dt), "dt", self.dt, "must be > 0 s")
-        require(count >= 0, "steps", count, "must be >= 0")
-        done, particle = self.integrator.advance(self.model, self.state, self.dt, count)
+        require(_is_whole(count) and 0 <= count <= MAX_STEPS, "count", count,
+                f"must be a whole number of steps from 0 to 2^53 = {MAX_STEPS}")
+        require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
+                "must be a time step > 0 s (a finite number)")
+        self.state.check(self.model.particle_count)
+        done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count))
         self.state.time += done * self.dt
-        self.steps_taken += done
+        self.state.steps += done
         if particle >= 0:
             v = self.state.velocities[particle]
             raise SimulationDiverged(
@@ -73,8 +105,12 @@ class Simulation:
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more (rounded to whole steps)."""
-        require(seconds >= 0, "seconds", seconds, "must be >= 0")
-        self.step(int(round(seconds / self.dt)))
+        require(_is_finite_number(seconds) and seconds >= 0, "seconds",
+                seconds, "must be a finite number of seconds >= 0")
+        steps = round(seconds / self.dt)
+        require(steps <= MAX_STEPS, "seconds", seconds,
+                f"is more than 2^53 steps of dt = {self.dt:g} s")
+        self.step(int(steps))
 
     def surfaces(self) -> list:
         """Each body's surface at the current state: ``surfaces.Surface`` with ``.name``,
@@ -83,10 +119,37 @@ class Simulation:
 
     def energy(self) -> dict:
         """Kinetic, gravitational, spring and total energy (J) of the current state."""
+        self.state.check(self.model.particle_count)
         return energies(self.model, self.state)
 
     def reset(self) -> None:
         """Back to the initial state (its contact memory included), with a fresh integrator."""
         self.state = State.initial(self.model)
-        self.steps_taken = 0
         self.integrator = get_integrator(self.scene.integrator, **self._integrator_options)
+
+    def save_state(self, path) -> None:
+        """Write the state (positions, velocities, time, steps, contact memory) to the NPZ file
+        ``path``, whole or not at all; ``load_state`` continues the run from it bit for bit."""
+        from .checkpoint import save_state
+
+        self.state.check(self.model.particle_count)
+        save_state(path, self)
+
+    def load_state(self, path) -> None:
+        """Continue from a state written by ``save_state`` for a model with as many particles."""
+        from .checkpoint import load_state
+
+        self.state = load_state(path, self.model.particle_count)
+
+
+def _is_finite_number(value) -> bool:
+    if not isinstance(value, numbers.Real) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:   # an int too large for a float
+        return False
+
+
+def _is_whole(value) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)

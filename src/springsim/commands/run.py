@@ -7,12 +7,15 @@ NAME = "run"
 HELP = "simulate a scene and save its frames (positions, velocities, energies) as an NPZ file"
 
 
+DEFAULT_FPS = 60.0
+
+
 def add_arguments(parser) -> None:
-    add_scene_arguments(parser)
+    add_scene_arguments(parser, scene_optional=True)   # --resume takes it from the checkpoint
     parser.add_argument("--duration", type=float, metavar="SECONDS",
                         help="simulated time in s (default: the scene's duration)")
-    parser.add_argument("--fps", type=float, default=60.0,
-                        help="frames recorded per simulated second (default: 60)")
+    parser.add_argument("--fps", type=float,
+                        help=f"frames recorded per simulated second (default: {DEFAULT_FPS:g})")
     parser.add_argument("--out", metavar="PATH",
                         help="the NPZ file to write (default: SCENE_NAME.npz here)")
     parser.add_argument("--plot", metavar="IMAGE",
@@ -22,11 +25,18 @@ def add_arguments(parser) -> None:
                              "PNG frames) with springsim.render")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar and no summary (errors are still shown)")
+    parser.add_argument("--checkpoint-every", type=float, metavar="SECONDS",
+                        help="every SECONDS of wall-clock time, save the run so far to "
+                             "OUT.checkpoint.npz (0: after every frame), for --resume")
+    parser.add_argument("--resume", metavar="CHECKPOINT",
+                        help="continue the run a checkpoint holds (its scene and options); "
+                             "the output is the same as had it never stopped")
 
 
-def add_scene_arguments(parser) -> None:
+def add_scene_arguments(parser, scene_optional: bool = False) -> None:
     """The scene and the options that change it, shared with `springsim bench`."""
-    parser.add_argument("scene", help="a built-in scene (see `springsim scenes`) or a .toml file")
+    parser.add_argument("scene", nargs="?" if scene_optional else None,
+                        help="a built-in scene (see `springsim scenes`) or a .toml file")
     parser.add_argument("--integrator", help="integrator name (default: the scene's)")
     parser.add_argument("--dt", type=float, metavar="SECONDS",
                         help="time step in s (default: the scene's)")
@@ -48,12 +58,20 @@ def scene_from_arguments(args):
 
 
 def run(args) -> int:
+    from ..checkpoint import check_interval, open_checkpoint, record_run
+    from ..errors import require
     from ..plots import plot_energy, plot_format
-    from ..recording import record, write_npz
+    from ..recording import write_npz
     from ..simulation import Simulation
     from ..summary import summary_lines
 
-    scene = scene_from_arguments(args)
+    resumed = open_checkpoint(args) if args.resume else None   # completes args from it
+    require(args.scene is not None, "scene", None,
+            "give a built-in scene (see `springsim scenes`), a .toml file, or --resume CHECKPOINT")
+    args.fps = DEFAULT_FPS if args.fps is None else args.fps
+    if args.checkpoint_every is not None:
+        check_interval(args.checkpoint_every)
+    scene = resumed.scene if resumed else scene_from_arguments(args)
     out = args.out or default_output(scene.name)
     # Every output is checked before simulating, so that a long run never ends in a typo.
     for option, path in (("--out", out), ("--plot", args.plot), ("--video", args.video)):
@@ -66,7 +84,7 @@ def run(args) -> int:
         output_format(args.video, key="--video")
 
     simulation = Simulation(scene)
-    recording = record(simulation, scene.duration, args.fps, progress=not args.quiet)
+    recording = record_run(simulation, args, out, resumed)   # record, with checkpoints
     write_npz(out, recording.arrays())
     written = [out]
     if args.plot:

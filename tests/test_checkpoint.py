@@ -1,0 +1,191 @@
+"""The state is the whole state: a copied, saved or checkpointed run continues bit for bit.
+
+Oracles: a run continued from a copy of its state, from a state file, or from a checkpoint of an
+interrupted `springsim run` (interrupted in process, or killed with SIGKILL) ends with exactly the
+arrays of the run that never stopped; the caller's scene is never changed; wrong or foreign files
+are refused with one line naming the argument.
+"""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import springsim
+from springsim import checkpoint
+from springsim.cli import main
+from springsim.errors import SceneError
+from springsim.state import ContactMemory
+
+# The jelly cube thrown sideways onto the plane: it lands, bounces and slides against friction.
+SIDEWAYS = ["bodies.0.velocity=[3.0, 0.0, 0.0]", "bodies.0.particles_per_edge=5",
+            "bodies.0.position.1=1.5"]
+SIDEWAYS_SET = [arg for item in SIDEWAYS for arg in ("--set", item)]
+# wall-clock timings: the only arrays two runs of the same scene may differ in
+TIMINGS = {"step_seconds", "wall_seconds"}
+
+
+def sideways_simulation(integrator, dt):
+    return springsim.Simulation(springsim.load_scene("jelly-plane", SIDEWAYS),
+                                integrator=integrator, dt=dt)
+
+
+def assert_same_state(a, b):
+    assert a.time == b.time and a.steps == b.steps
+    assert np.array_equal(a.positions, b.positions)
+    assert np.array_equal(a.velocities, b.velocities)
+    for name, x, y in zip(ContactMemory._fields, a.contacts, b.contacts):
+        assert np.array_equal(x, y), name
+
+
+@pytest.mark.parametrize("integrator, dt", [("implicit_euler", 0.01), ("rk4", 0.001)])
+def test_a_run_continued_from_a_copy_or_a_file_of_its_state_is_bit_identical(tmp_path,
+                                                                             integrator, dt):
+    first = sideways_simulation(integrator, dt)
+    first.advance(1.0)    # landed (at 0.45 s), sliding on the plane
+    if integrator == "implicit_euler":
+        assert np.count_nonzero(first.state.contacts.kind) > 0   # contact memory in use
+        assert np.any(first.state.contacts.friction_damping > 0)
+    copied = sideways_simulation(integrator, dt)
+    copied.state = first.state.copy()
+    first.save_state(tmp_path / "state.npz")
+    loaded = sideways_simulation(integrator, dt)
+    loaded.load_state(tmp_path / "state.npz")
+    for simulation in (first, copied, loaded):
+        simulation.advance(0.3)
+    assert_same_state(copied.state, first.state)
+    assert_same_state(loaded.state, first.state)
+    assert loaded.steps_taken == first.steps_taken == round(1.3 / dt)
+
+
+def test_state_files_refuse_a_wrong_model_or_a_foreign_file(tmp_path):
+    simulation = sideways_simulation("rk4", 1e-3)
+    simulation.save_state(tmp_path / "state.npz")
+    other = springsim.Simulation(springsim.load_scene("jelly-plane"))
+    with pytest.raises(SceneError, match="holds a state of 125 particles; this model has 1000"):
+        other.load_state(tmp_path / "state.npz")
+    (tmp_path / "text.npz").write_text("not numbers\n")
+    np.savez(tmp_path / "recording.npz", positions=np.zeros((2, 125, 3)))
+    np.savez(tmp_path / "newer.npz", format="springsim-state", version=99)
+    cases = {"missing.npz": "no such file", "text.npz": "not an NPZ file",
+             "recording.npz": "has no springsim format name",
+             "newer.npz": "format version 99"}
+    for name, problem in cases.items():
+        with pytest.raises(SceneError, match=problem) as caught:
+            simulation.load_state(tmp_path / name)
+        assert caught.value.key == "path" and "\n" not in str(caught.value)
+    assert simulation.steps_taken == 0   # nothing was half-loaded
+
+
+def test_save_state_is_whole_or_not_at_all(tmp_path, monkeypatch):
+    simulation = sideways_simulation("rk4", 1e-3)
+    simulation.save_state(tmp_path / "state.npz")
+    before = (tmp_path / "state.npz").read_bytes()
+
+    def fail(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(np, "savez", fail)
+    simulation.step(3)
+    with pytest.raises(OSError):
+        simulation.save_state(tmp_path / "state.npz")
+    assert (tmp_path / "state.npz").read_bytes() == before
+    assert os.listdir(tmp_path) == ["state.npz"]
+
+
+def test_the_simulation_never_changes_the_callers_scene():
+    scene = springsim.load_scene("jelly-plane")
+    simulation = springsim.Simulation(scene, integrator="implicit_euler", dt=0.02)
+    assert (scene.integrator, scene.dt) == ("rk4", 0.001)
+    assert (simulation.scene.integrator, simulation.scene.dt) == ("implicit_euler", 0.02)
+    simulation.scene.bodies[0].particle_mass = 2.0
+    assert scene.bodies[0].particle_mass == 1.0
+
+
+# --- springsim run --checkpoint-every / --resume ------------------------------------------------
+
+RUN = ["run", "jelly-plane", *SIDEWAYS_SET, "--integrator", "implicit_euler", "--dt", "0.01",
+       "--duration", "1.0", "--fps", "30", "--quiet"]
+
+
+def assert_same_recording(path_a, path_b):
+    with np.load(path_a) as a, np.load(path_b) as b:
+        assert sorted(a.files) == sorted(b.files)
+        for name in set(a.files) - TIMINGS:
+            assert a[name].dtype == b[name].dtype and np.array_equal(a[name], b[name]), name
+
+
+def test_a_resumed_run_writes_the_npz_of_the_run_that_never_stopped(tmp_path, monkeypatch,
+                                                                    capsys):
+    assert main([*RUN, "--out", str(tmp_path / "whole.npz")]) == 0
+    stop_after = 12
+    original = checkpoint.write_checkpoint
+
+    def write_then_stop(path, simulation, recording, frame, *rest):
+        original(path, simulation, recording, frame, *rest)
+        if frame == stop_after:
+            raise KeyboardInterrupt   # as Ctrl+C between two frames
+    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    out = tmp_path / "part.npz"
+    assert main([*RUN, "--out", str(out), "--checkpoint-every", "0"]) == 130
+    assert not out.exists()
+    saved = tmp_path / "part.checkpoint.npz"
+    with np.load(saved) as data:
+        assert int(data["frames_done"]) == stop_after + 1
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(saved), "--quiet"]) == 0   # to the --out it was given
+    assert_same_recording(tmp_path / "whole.npz", out)
+    capsys.readouterr()
+
+
+def frames_done(path) -> int:
+    try:
+        with np.load(path) as data:
+            return int(data["frames_done"])
+    except FileNotFoundError:
+        return 0
+
+
+def test_a_run_killed_after_a_checkpoint_resumes_to_the_same_npz(tmp_path):
+    """A real interruption: SIGKILL once a checkpoint holds the cube on the plane (frame 20 of
+    91, 0.67 s; it lands at 0.45 s), or later: whatever frame it holds, the result is the same."""
+    command = [sys.executable, "-m", "springsim", *RUN, "--duration", "3"]
+    subprocess.run([*command, "--out", "whole.npz"], cwd=tmp_path, check=True, timeout=300)
+    run = subprocess.Popen([*command, "--out", "part.npz", "--checkpoint-every", "0"],
+                           cwd=tmp_path)
+    try:
+        deadline = time.monotonic() + 300
+        while frames_done(tmp_path / "part.checkpoint.npz") < 20 and run.poll() is None:
+            assert time.monotonic() < deadline
+            time.sleep(0.002)
+    finally:
+        os.kill(run.pid, signal.SIGKILL)
+        run.wait()
+    assert not (tmp_path / "part.npz").exists() or run.returncode == 0
+    (tmp_path / "part.npz").unlink(missing_ok=True)
+    print("killed after frame", frames_done(tmp_path / "part.checkpoint.npz"))
+    resumed = subprocess.run([*command[:3], "run", "--resume", "part.checkpoint.npz", "--quiet"],
+                             cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same_recording(tmp_path / "whole.npz", tmp_path / "part.npz")
+
+
+def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_path, capsys):
+    out = tmp_path / "x.npz"
+    assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 0
+    saved = str(tmp_path / "x.checkpoint.npz")
+    cases = [(["jelly-plane"], "give no scene"), (["--dt", "0.02"], "give no --dt"),
+             (["--fps", "60"], "give no --fps"), (["--set", "drag=1"], "give no --set")]
+    for extra, problem in cases:
+        code, err = main(["run", "--resume", saved, *extra]), capsys.readouterr().err
+        assert code == 2 and problem in err and len(err.splitlines()) == 1, err
+    for path, problem in [(str(out), "is not a springsim-checkpoint file"),
+                          (str(tmp_path / "none.npz"), "no such file")]:
+        code, err = main(["run", "--resume", path]), capsys.readouterr().err
+        assert code == 2 and problem in err and len(err.splitlines()) == 1, err
+    code, err = main(["run"]), capsys.readouterr().err
+    assert code == 2 and "--resume CHECKPOINT" in err
+    code, err = main([*RUN, "--checkpoint-every", "nan"]), capsys.readouterr().err
+    assert code == 2 and err.startswith("springsim run: --checkpoint-every = nan")
