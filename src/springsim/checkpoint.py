@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SceneError, require
+from .scene import Scene
 from .state import ContactMemory, State
 
 STATE_FORMAT = "springsim-state"
@@ -162,16 +163,17 @@ class Resumed:
     """A checkpoint opened to continue its run."""
 
     path: str
-    scene: object          # the Scene, as the checkpoint wrote it
+    scene: Scene           # as the checkpoint wrote it
     arguments: dict        # the run's options (RUN_OPTIONS)
     arrays: dict
+    frames: int            # frames recorded so far
 
     def start(self, simulation, frame_count: int):
         """Put the checkpoint's state into ``simulation``; the recording so far (sized for
         ``frame_count`` frames) and the first frame still to record, for ``record``'s start."""
         from .recording import Recording
 
-        frames = int(self.arrays["frames_done"])
+        frames = self.frames
         require(1 <= frames <= frame_count, "--resume", self.path,
                 f"holds {frames} frames, but its run records {frame_count}")
         simulation.state = state_from_arrays(self.arrays, simulation.model.particle_count,
@@ -182,7 +184,10 @@ class Resumed:
             saved = self.arrays.get(f"recording.{name}")
             require(saved is not None, "--resume", self.path, f"has no recording.{name}")
             if name in per_frame:
-                getattr(recording, name)[:frames] = saved
+                target = getattr(recording, name)[:frames]
+                require(saved.shape == target.shape, "--resume", self.path,
+                        f"holds recording.{name} of shape {saved.shape}, not {target.shape}")
+                target[...] = saved
             elif saved.shape == ():    # a number or a name: its kind as the field holds it
                 setattr(recording, name, type(getattr(recording, name))(saved.item()))
         return recording, frames
@@ -201,14 +206,17 @@ def open_checkpoint(args) -> Resumed:
     arrays = read_file(args.resume, CHECKPOINT_FORMAT, "--resume")
     try:
         arguments = json.loads(str(arrays["arguments"]))
+        if not isinstance(arguments, dict):
+            raise ValueError("its arguments are not a table")
         scene = scene_from_table(tomllib.loads(str(arrays["scene_toml"])))
-        scene.validate()
-    except (KeyError, ValueError, tomllib.TOMLDecodeError) as error:
+        frames = int(arrays["frames_done"])
+    except (KeyError, TypeError, ValueError, tomllib.TOMLDecodeError) as error:
         raise SceneError("--resume", args.resume, f"holds no readable run ({error})") from None
+    scene.validate()
     for name in RUN_OPTIONS:
         if name in SCENE_OPTIONS or getattr(args, name, None) is None:
             setattr(args, name, arguments.get(name))
-    return Resumed(args.resume, scene, arguments, arrays)
+    return Resumed(args.resume, scene, arguments, arrays, frames)
 
 
 def record_run(simulation, args, out: str, resumed: Resumed | None = None):
