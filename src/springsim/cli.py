@@ -3,12 +3,18 @@ defines ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; 
 new file there. Modules import their heavy dependencies inside ``run`` so that start-up stays fast.
 """
 import argparse
+import contextlib
 import importlib
 import pkgutil
+import signal
 import sys
+import warnings
 
 from . import commands
-from .errors import SceneError, SimulationDiverged
+from .errors import OutputFailed, SceneError, SimulationDiverged
+
+# Exit codes (README, "The command line").
+BAD_INPUT, DIVERGED, NO_RENDERER, WRITE_FAILED = 2, 3, 4, 5
 
 
 def command_modules():
@@ -30,16 +36,56 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every half-written file is removed on the way out."""
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return args.handler(args)
-    except (SceneError, SimulationDiverged) as error:
+        with terminate_like_interrupt(), quiet_overflow():
+            return args.handler(args)
+    except (SceneError, SimulationDiverged, OutputFailed) as error:
         print(f"springsim {args.command}: {error}", file=sys.stderr)
-        return 2 if isinstance(error, SceneError) else 3
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+        return (BAD_INPUT if isinstance(error, SceneError)
+                else DIVERGED if isinstance(error, SimulationDiverged) else WRITE_FAILED)
+    except KeyboardInterrupt as interrupt:
+        terminated = isinstance(interrupt, Terminated)
+        print("terminated" if terminated else "interrupted", file=sys.stderr)
+        return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+@contextlib.contextmanager
+def terminate_like_interrupt():
+    """While a command runs, SIGTERM raises Terminated (in the main thread only: elsewhere
+    Python cannot install handlers, and the caller keeps its own)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def quiet_overflow():
+    """A blowing-up state overflows on its way to the divergence check; that one line is the
+    answer, so NumPy's overflow and invalid-value warnings are not printed before it."""
+    import numpy as np
+
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), \
+            warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=RuntimeWarning, module="numpy")
+        warnings.filterwarnings("ignore", message=".*(overflow|invalid value|divide by zero)",
+                                category=RuntimeWarning)
+        yield
 
 
 if __name__ == "__main__":

@@ -13,6 +13,21 @@ class SceneError(ValueError):
         super().__init__(f"{key} = {value!r}: {allowed}")
 
 
+class OutputFailed(OSError):
+    """A file could not be written (disk full, folder removed, writer failed); the previous file
+    at ``path``, if any, is left as it was."""
+
+    def __init__(self, path, reason):
+        self.path, self.reason = str(path), reason
+        text = reason.strerror if isinstance(reason, OSError) and reason.strerror else reason
+        super().__init__(getattr(reason, "errno", None),
+                         f"could not write {self.path}: {text}; any previous file there is "
+                         f"unchanged")
+
+    def __str__(self):
+        return self.strerror
+
+
 class SimulationDiverged(RuntimeError):
     """The state blew up (NaN, infinity or a speed above the course framework's limit)."""
 
@@ -48,3 +63,12 @@ def require(condition: bool, key: str, value, allowed: str) -> None:
     """Raise a SceneError for ``key`` unless ``condition`` holds."""
     if not condition:
         raise SceneError(key, value, allowed)
+
+
+MAX_ANGLE = 1e6   # degrees; beyond, float64 rounding leaves no meaningful angle (2778 turns)
+
+
+def require_angle(value, key: str) -> None:
+    """An angle in degrees: finite and within +-MAX_ANGLE."""
+    require(is_finite(value) and np.ndim(value) == 0 and abs(float(value)) <= MAX_ANGLE, key,
+            value, f"must be a finite angle in degrees, between -{MAX_ANGLE:g} and {MAX_ANGLE:g}")
