@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from .errors import require
-from .sizes import gigabytes, machine_memory
+from . import sizes
 
 MAX_FRAMES = 1_000_000        # 4.6 hours at 60 fps; more would take hours to record or draw
 FRAME_MEMORY_SHARE = 0.5      # of the machine's memory, for the kept frames
@@ -26,8 +26,7 @@ MAX_STEPS = 2 ** 53           # steps are counted exactly in float64
 def frame_count(duration: float, fps: float, dt: float) -> int:
     """How many frames ``duration`` s at ``fps`` make (checked: one rule for every command)."""
     check_fps(fps)
-    require(_finite_number(duration) and duration > 0, "duration", duration,
-            "must be a finite time > 0 s")
+    check_duration(duration)
     require(duration / dt < MAX_STEPS, "dt", dt,
             f"is too small for a {duration:g} s run (more than 2^53 steps): use a larger dt")
     intervals = math.floor(duration * fps + 1e-9)   # 1e-9: 8 s * 60 fps is 480 intervals
@@ -35,6 +34,11 @@ def frame_count(duration: float, fps: float, dt: float) -> int:
             f"makes {intervals + 1:.3g} frames in {duration:g} s; at most {MAX_FRAMES:,} frames "
             f"are kept: lower fps or duration")
     return intervals + 1 + int(duration - intervals / fps > dt / 2)
+
+
+def check_duration(duration) -> None:
+    require(_finite_number(duration) and duration > 0, "duration", duration,
+            "must be a finite time > 0 s")
 
 
 def check_fps(fps) -> None:
@@ -45,13 +49,13 @@ def check_fps(fps) -> None:
 def check_frame_memory(frames: int, particles: int, arrays: int, fps: float) -> None:
     """Refuse frames that will not fit: ``arrays`` (F, P, 3) float64 arrays of them."""
     needed = arrays * frames * particles * 3 * 8 + 8 * frames * 8
-    memory = machine_memory()
+    memory = sizes.machine_memory()
     if memory is None:
         return   # no way to tell on this system; let NumPy try
     require(needed <= FRAME_MEMORY_SHARE * memory, "fps", fps,
             f"keeping {frames:,} frames of {particles:,} particles needs about "
-            f"{gigabytes(needed)}; this machine has {gigabytes(memory)} of memory: lower fps or "
-            f"duration (`springsim bench` times large models without recording them)")
+            f"{sizes.gigabytes(needed)}; this machine has {sizes.gigabytes(memory)} of memory: "
+            f"lower fps or duration (`springsim bench` times large models without recording them)")
 
 
 def plan_frames(duration: float, fps: float, dt: float, particles: int,

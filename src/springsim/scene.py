@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import is_finite, require
+from .sampling import check_duration
 from .sizes import check_scene_size
 
 
@@ -38,8 +39,7 @@ class Scene:
         require(self.integrator in integrator_names(), "integrator", self.integrator,
                 "must be one of " + ", ".join(integrator_names()))
         require(is_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")
-        require(is_finite(self.duration) and self.duration > 0, "duration", self.duration,
-                "must be a finite time > 0 s")
+        check_duration(self.duration)
         require(np.shape(self.gravity) == (3,) and is_finite(self.gravity), "gravity",
                 self.gravity, "must be three finite numbers (m/s^2)")
         require(is_finite(self.drag) and self.drag >= 0, "drag", self.drag, "must be >= 0 N s/m")

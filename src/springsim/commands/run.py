@@ -37,8 +37,11 @@ def add_scene_arguments(parser) -> None:
 
 def scene_from_arguments(args):
     """The scene with --set applied, then --integrator, --dt and --duration where given."""
+    from ..sampling import check_duration
     from ..scenefile import load_scene, toml_value
 
+    if getattr(args, "duration", None) is not None:
+        check_duration(args.duration)   # the frame sampler's rule, whatever TOML says of inf
     overrides = list(args.set)
     for key in ("integrator", "dt", "duration"):
         value = getattr(args, key, None)
