@@ -23,8 +23,15 @@ def command_modules():
     return [importlib.import_module(f"{commands.__name__}.{name}") for name in names]
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
+
+    def error(self, message):
+        self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="springsim",
         description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
                     "of integrators. `springsim COMMAND --help` tells more.")

@@ -239,7 +239,7 @@ def typed_item(value, list_name: str, current, key: str):
     if "type" not in value and current is not None:
         return merge_table(current, value, key)
     kind = value.get("type")
-    require(kind in registry, f"{key}.type", kind,
+    require(isinstance(kind, str) and kind in registry, f"{key}.type", kind,
             f"a {label} type must be one of " + ", ".join(registry))
     rest = {name: item for name, item in value.items() if name != "type"}
     return merge_table(registry[kind](), rest, key)
