@@ -12,6 +12,7 @@ from pathlib import Path
 import imageio.v3 as iio
 import numpy as np
 
+from .. import sizes
 from ..errors import OutputFailed, require
 from ..safe_files import StagedOutput, check_output_path
 from ..sampling import check_fps
@@ -19,6 +20,7 @@ from ..sampling import check_fps
 FORMATS = ("mp4", "gif", "png folder")
 MIN_SIDE, MAX_SIDE = 16, 8192     # pixels; 8192 is twice 4K, and within every GL's limits
 MP4_QUALITY = 15                  # x264's constant rate factor (0 lossless, 51 worst)
+BYTES_PER_PIXEL = 100             # peak memory of a render: 8192 x 8192 px took 5.9 GB
 
 
 def output_format(path, key: str = "out") -> str:
@@ -39,6 +41,10 @@ def check_frame_size(width, height) -> None:
         require(isinstance(value, int) and not isinstance(value, bool)
                 and MIN_SIDE <= value <= MAX_SIDE, key, value,
                 f"must be a whole number of pixels from {MIN_SIDE} to {MAX_SIDE}")
+    needed, memory = BYTES_PER_PIXEL * width * height, sizes.machine_memory()
+    require(memory is None or needed <= memory / 2, "width", width,
+            f"a {width} x {height} picture needs about {sizes.gigabytes(needed)} to render; "
+            f"this machine has {sizes.gigabytes(memory or 0)} of memory")
 
 
 def check_output(path, width: int, height: int, fps: float, key: str = "out") -> str:
