@@ -161,6 +161,8 @@ set_strings = st.one_of(st.builds(lambda key, value: f"{key}={value}", st.sample
 @example("implicit.cg_tolerance=5")
 @example("duration=inf")
 @example("dt=1e-300")
+@example("0\r0=")
+@example("bodies.0.pinned=[\n1]")
 def test_a_set_string_runs_or_is_one_line_with_exit_2_or_3(tmp_path_factory, capsys, override):
     out = tmp_path_factory.mktemp("set") / "out.npz"
     code = main(["run", "jelly-plane", *SMALL, "--duration", "0.01", f"--set={override}",

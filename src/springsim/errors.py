@@ -10,7 +10,7 @@ class SceneError(ValueError):
 
     def __init__(self, key: str, value, allowed: str):
         self.key, self.value, self.allowed = key, value, allowed
-        super().__init__(f"{key} = {value!r}: {allowed}")
+        super().__init__(one_line(f"{key} = {value!r}: {allowed}"))
 
 
 class OutputFailed(OSError):
@@ -21,8 +21,8 @@ class OutputFailed(OSError):
         self.path, self.reason = str(path), reason
         text = reason.strerror if isinstance(reason, OSError) and reason.strerror else reason
         super().__init__(getattr(reason, "errno", None),
-                         f"could not write {self.path}: {text}; any previous file there is "
-                         f"unchanged")
+                         one_line(f"could not write {self.path}: {text}; any previous file "
+                                  f"there is unchanged"))
 
     def __str__(self):
         return self.strerror
@@ -49,6 +49,12 @@ def _more_stable(integrator: str) -> str:
     if integrator == "rk4":
         return "implicit_euler (stable at large steps)"
     return "a more stable integrator (rk4, or implicit_euler for large steps)"
+
+
+def one_line(text: str) -> str:
+    """``text`` with line breaks and other control characters escaped (as repr writes them), so
+    that an error is one line whatever a user's key or file name holds."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def is_finite(value) -> bool:
