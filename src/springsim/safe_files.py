@@ -124,31 +124,24 @@ def atomic_output(path):
             yield file
 
 
-def write_bytes(path, data: bytes) -> None:
-    """``data`` as the whole of ``path``."""
-    with atomic_output(path) as file:
-        file.write(data)
-
-
 def _sync(path: Path) -> None:
     """Put a written file, or every file of a written folder, on disk before the rename."""
-    files = sorted(path.iterdir()) if path.is_dir() else [path]
-    for file in files:
-        descriptor = os.open(file, os.O_RDONLY | os.O_NOFOLLOW)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
+    for file in sorted(path.iterdir()) if path.is_dir() else [path]:
+        _fsync(file, os.O_RDONLY | os.O_NOFOLLOW)
 
 
 def _sync_folder(folder: Path) -> None:
     """Make a rename in ``folder`` durable (not every file system can sync a folder)."""
     with contextlib.suppress(OSError):
-        descriptor = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
+        _fsync(folder, os.O_RDONLY | os.O_DIRECTORY)
+
+
+def _fsync(path: Path, flags: int) -> None:
+    descriptor = os.open(path, flags)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
 
 
 def _give_usual_mode(path: Path) -> None:
