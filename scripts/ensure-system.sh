@@ -7,7 +7,8 @@ springsim_ensure_system() {
   command -v dpkg-query >/dev/null 2>&1 || return 0   # not Debian or Ubuntu: nothing to check
   local wanted installed missing=() package
   wanted=$(sed -e 's/#.*//' scripts/system-packages.txt | tr -s '[:space:]' ' ')
-  installed=" $(dpkg-query -W -f='${Package} ${db:Status-Abbrev}\n' $wanted 2>/dev/null \
+  # dpkg-query fails when a package is unknown to it; what it prints is still the answer
+  installed=" $( (dpkg-query -W -f='${Package} ${db:Status-Abbrev}\n' $wanted 2>/dev/null || true) \
                 | awk '$2 == "ii" {printf "%s ", $1}')"
   for package in $wanted; do
     [[ "$installed" == *" $package "* ]] || missing+=("$package")
