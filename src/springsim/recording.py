@@ -13,6 +13,8 @@ from .energy import gravitational_energy, kinetic_energy, spring_energy
 from .safe_files import atomic_output
 from .sampling import frame_steps
 
+frame_schedule = frame_steps   # the older name: the step count of each frame
+
 
 @dataclass
 class Recording:
