@@ -8,7 +8,6 @@ import importlib
 import pkgutil
 import signal
 import sys
-import warnings
 
 from . import commands
 from .errors import OutputFailed, SceneError, SimulationDiverged
@@ -81,18 +80,12 @@ def _raise_terminated(signum, frame):
     raise Terminated()
 
 
-@contextlib.contextmanager
 def quiet_overflow():
     """A blowing-up state overflows on its way to the divergence check; that one line is the
     answer, so NumPy's overflow and invalid-value warnings are not printed before it."""
     import numpy as np
 
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), \
-            warnings.catch_warnings():
-        warnings.filterwarnings("ignore", category=RuntimeWarning, module="numpy")
-        warnings.filterwarnings("ignore", message=".*(overflow|invalid value|divide by zero)",
-                                category=RuntimeWarning)
-        yield
+    return np.errstate(over="ignore", invalid="ignore", divide="ignore")
 
 
 if __name__ == "__main__":
