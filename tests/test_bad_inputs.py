@@ -112,6 +112,9 @@ def test_run_and_render_have_one_rule_for_the_duration(capsys, tmp_path, monkeyp
       "implicit.newton_iterations=0"], "implicit.newton_iterations", ">= 1"),
     (["run", "jelly-plane", "--set", "implicit.cg_max_iterations=-3"],
      "implicit.cg_max_iterations", ">= 1"),
+    (["bench", "jelly-plane", "--steps", str(10 ** 20)], "steps", "from 1 to 1,000,000,000"),
+    (["bench", "jelly-plane", "--seconds", "1e300"], "seconds", "at most 3600 s"),
+    (["view", "--frames", "-1"], "--frames", ">= 0"),
 ])
 def test_each_bad_value_is_blamed_on_its_own_key(capsys, tmp_path, monkeypatch, argv, key,
                                                  says):
