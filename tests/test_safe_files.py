@@ -82,6 +82,34 @@ def test_ffmpeg_failing_on_a_full_disk_is_an_error_and_the_previous_mp4_stays(tm
     assert os.listdir(tmp_path) == ["movie.mp4"]
 
 
+def test_a_full_disk_during_render_keeps_the_previous_mp4_and_exits_5_with_one_line(tmp_path):
+    """The issue's case: `springsim render --out x.mp4` on a full disk replaced a good MP4 with a
+    truncated one and exited 0. The limit is set as ffmpeg starts, after the simulation."""
+    good = tmp_path / "x.mp4"
+    with FrameWriter(good, 12, 160, 96) as writer:
+        writer.append(noise_frames(1)[0])
+    before = good.read_bytes()
+    process = run_python(f"""
+        import resource, sys
+        from springsim import cli
+        from springsim.render import video
+        start_ffmpeg = video.FfmpegPipe.__init__
+        def on_a_full_disk(self, *args):
+            resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))
+            start_ffmpeg(self, *args)
+        video.FfmpegPipe.__init__ = on_a_full_disk
+        sys.exit(cli.main(["render", "jelly-plane", *{SMALL!r}, "--duration", "0.5", "--fps",
+                           "24", "--width", "320", "--height", "180", "--out", {str(good)!r},
+                           "--quiet"]))
+        """, tmp_path)
+    out, err = process.communicate(timeout=600)
+    assert (process.returncode, out) == (5, ""), err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"springsim render: could not write {good}: ffmpeg")
+    assert good.read_bytes() == before
+    assert os.listdir(tmp_path) == ["x.mp4"]
+
+
 @pytest.mark.parametrize("suffix", [".gif", ".mp4", ""])
 def test_a_writer_error_leaves_nothing_behind(tmp_path, suffix):
     with pytest.raises(RuntimeError, match="renderer broke"):
