@@ -5,6 +5,7 @@ Frames go to a staged file (or folder) in a private staging folder beside the ta
 writer says it succeeded (ffmpeg's exit status included); an error, Ctrl-C or SIGTERM leaves the
 target as it was and no temporary file behind.
 """
+import signal
 import subprocess
 import tempfile
 from pathlib import Path
@@ -82,7 +83,7 @@ class FrameWriter:
         if self.kind == "mp4":
             return FfmpegPipe(self.temporary, self.fps, *reversed(self.size))
         if self.kind == "gif":
-            return iio.imopen(self.temporary, "w", extension=".gif", plugin="pillow")
+            return GifFrames(self.temporary, self.fps)
         return None
 
     def append(self, frame: np.ndarray) -> None:
@@ -90,11 +91,8 @@ class FrameWriter:
         require(frame.shape[:2] == self.size, "frame size", frame.shape[:2],
                 f"every frame must be {self.size[1]} x {self.size[0]} px")
         try:
-            if self.kind == "mp4":
+            if self._writer is not None:
                 self._writer.write(frame)
-            elif self.kind == "gif":
-                # 8 bits: each frame gets its own 256-colour palette; GIF counts time in 10 ms
-                self._writer.write(frame, duration=1000.0 / self.fps, loop=0, bits=8)
             else:
                 iio.imwrite(self.temporary / f"frame_{self.frames:05d}.png", frame)
         except OSError as error:
@@ -131,6 +129,25 @@ class FrameWriter:
         return False
 
 
+class GifFrames:
+    """A GIF as Pillow writes one: the frames, each with its own 256-colour palette, kept until
+    ``close`` saves them in one go (GIF counts time in 10 ms units)."""
+
+    def __init__(self, path: Path, fps: float):
+        self.path, self.milliseconds, self.images = path, 1000.0 / fps, []
+
+    def write(self, frame: np.ndarray) -> None:
+        from PIL import Image
+
+        self.images.append(Image.fromarray(frame).quantize(colors=256))
+
+    def close(self) -> None:
+        images, self.images = self.images, []
+        if images:
+            images[0].save(self.path, format="GIF", save_all=True, append_images=images[1:],
+                           duration=self.milliseconds, loop=0)
+
+
 class FfmpegPipe:
     """Raw RGB frames piped into ffmpeg (imageio-ffmpeg's binary), H.264 in yuv420p; ``close``
     raises OSError unless ffmpeg exits 0 (a full disk, say), with ffmpeg's own last words."""
@@ -160,6 +177,9 @@ class FfmpegPipe:
         except BrokenPipeError:
             pass
         status = self._process.wait()
+        if status < 0:   # SIGXFSZ: the file grew past the size limit, as on a full disk
+            raise OSError(f"ffmpeg was stopped by {signal.Signals(-status).name} "
+                          f"({signal.strsignal(-status)}): {self._last_words()}")
         if status != 0:
             raise OSError(f"ffmpeg failed (exit status {status}): {self._last_words()}")
         self._errors.close()
