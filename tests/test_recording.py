@@ -15,8 +15,8 @@ from springsim import Simulation, load_scene
 from springsim.errors import SceneError
 from springsim.model import build_model
 from springsim.plots import plot_energy
-from springsim.recording import (Recording, check_memory, deepest_penetration, frame_schedule,
-                                 record, write_npz)
+from springsim.recording import Recording, deepest_penetration, record, write_npz
+from springsim.sampling import check_frame_memory, frame_steps
 from springsim.springs import SpringKind
 
 N = 4  # a 4 x 4 x 4 cube: small enough to record in well under a second
@@ -26,7 +26,7 @@ SMALL_CUBE = f"bodies.0.particles_per_edge={N}"
 @pytest.mark.parametrize("duration, fps, dt", [(8.0, 60.0, 1e-3), (1.0, 60.0, 0.02),
                                                (0.5, 24.0, 1e-4), (2.0, 7.0, 3e-3)])
 def test_frames_are_whole_steps_within_half_a_step_of_k_over_fps(duration, fps, dt):
-    steps = frame_schedule(duration, fps, dt)
+    steps = frame_steps(duration, fps, dt)
     frame_times = np.arange(len(steps)) / fps
     if round(duration * fps, 9).is_integer():
         assert len(steps) == round(duration * fps) + 1
@@ -109,8 +109,8 @@ def test_a_failed_write_leaves_the_old_file_whole_and_no_temporary_file(tmp_path
 
 def test_a_recording_too_large_for_memory_is_refused_before_it_starts():
     with pytest.raises(SceneError) as error:
-        check_memory(481, 10 ** 9, 60.0)            # 23 TB of frames
-    assert error.value.key == "fps" and "lower --fps or --duration" in error.value.allowed
+        check_frame_memory(481, 10 ** 9, 2, 60.0)    # 23 TB of frames
+    assert error.value.key == "fps" and "lower fps or duration" in error.value.allowed
 
 
 def test_the_energy_plot_draws_the_three_energies_and_their_sum(small_run, tmp_path):

@@ -94,12 +94,12 @@ def test_render_writes_an_mp4_and_a_gif_with_the_frames_asked_for(renderer, tmp_
     assert main(["render", "jelly-bowl", "--out", str(gif), "--camera", "follow",
                  "--draw", "surfaces,structural,terrains", *common]) == 0
     video, fps = read_video(mp4)
-    assert video.shape == (6, 96, 160, 3) and fps == 12
+    assert video.shape == (7, 96, 160, 3) and fps == 12   # frames at k / 12 s, k = 0 .. 6
     assert not_background(video).mean() > 0.05
     assert not np.array_equal(video[0], video[-1])     # the cube moved
     frames = iio.imread(gif, index=None)
-    assert frames.shape[:3] == (6, 96, 160)
-    durations = [iio.immeta(gif, index=i)["duration"] for i in range(6)]
+    assert frames.shape[:3] == (7, 96, 160)
+    durations = [iio.immeta(gif, index=i)["duration"] for i in range(7)]
     assert all(abs(d - 1000 / 12) <= 10 for d in durations)   # GIF keeps 10 ms units
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.gif", "cube.mp4"]
 
@@ -111,7 +111,7 @@ def test_write_video_to_a_folder_of_pngs(renderer, tmp_path):
     folder = write_video(sim.model, times, positions, tmp_path / "frames", fps=40, width=64,
                          height=48, camera="side")
     pictures = sorted(folder.iterdir())
-    assert [p.name for p in pictures] == [f"frame_{i:05d}.png" for i in range(4)]
+    assert [p.name for p in pictures] == [f"frame_{i:05d}.png" for i in range(5)]
     assert iio.imread(pictures[-1]).shape == (48, 64, 3)
 
 
@@ -134,5 +134,5 @@ def test_video_frames_are_in_real_time_when_a_frame_is_not_a_whole_number_of_ste
                                                     ["bodies.0.particles_per_edge=3"]),
                                integrator="implicit_euler", dt=1 / 60)
     times, positions = simulate_frames(sim, 2.0, 25, progress=False)
-    assert len(times) == 50
-    assert np.all(np.abs(times - np.arange(50) / 25) <= sim.dt / 2 + 1e-12)
+    assert len(times) == 51
+    assert np.all(np.abs(times - np.arange(51) / 25) <= sim.dt / 2 + 1e-12)

@@ -11,6 +11,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 import imageio.v3 as iio
 
@@ -20,7 +21,11 @@ WIDTH, HEIGHT = 800, 500
 def start_xvfb():
     """An Xvfb server on a free display number (it reports the number on a pipe)."""
     xvfb = shutil.which("Xvfb")
-    assert xvfb, "Xvfb is missing: apt-get install xvfb (CI installs it in .ci/run)"
+    if not xvfb:
+        reason = ("Xvfb is missing: apt-get install xvfb xauth (./test.sh installs it when run "
+                  "as root; scripts/system-packages.txt)")
+        assert os.environ.get("CI", "").lower() not in ("true", "1"), reason  # CI must run it
+        pytest.skip(reason)
     read, write = os.pipe()
     server = subprocess.Popen([xvfb, "-displayfd", str(write), "-screen", "0",
                                f"{WIDTH + 200}x{HEIGHT + 200}x24", "-nolisten", "tcp"],

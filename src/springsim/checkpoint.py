@@ -222,7 +222,8 @@ def open_checkpoint(args) -> Resumed:
 def record_run(simulation, args, out: str, resumed: Resumed | None = None):
     """``springsim run``'s recording: from the start or from the checkpoint ``resumed``, writing
     a checkpoint beside ``out`` every ``args.checkpoint_every`` s when that is given."""
-    from .recording import frame_schedule, record
+    from .recording import record
+    from .sampling import frame_steps
     from .scenefile import scene_to_toml
 
     checkpoints = None
@@ -232,7 +233,8 @@ def record_run(simulation, args, out: str, resumed: Resumed | None = None):
                                   arguments, scene_to_toml(simulation.scene))
     start = None
     if resumed is not None:
-        frame_count = len(frame_schedule(simulation.scene.duration, args.fps, simulation.dt))
+        frame_count = len(frame_steps(simulation.scene.duration, args.fps, simulation.dt,
+                                      simulation.model.particle_count))
         start = resumed.start(simulation, frame_count)
     return record(simulation, simulation.scene.duration, args.fps, progress=not args.quiet,
                   on_frame=checkpoints, start=start)

@@ -3,12 +3,17 @@ defines ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; 
 new file there. Modules import their heavy dependencies inside ``run`` so that start-up stays fast.
 """
 import argparse
+import contextlib
 import importlib
 import pkgutil
+import signal
 import sys
 
 from . import commands
-from .errors import SceneError, SimulationDiverged
+from .errors import OutputFailed, SceneError, SimulationDiverged
+
+# Exit codes (README, "The command line").
+BAD_INPUT, DIVERGED, NO_RENDERER, WRITE_FAILED = 2, 3, 4, 5
 
 
 def command_modules():
@@ -17,8 +22,15 @@ def command_modules():
     return [importlib.import_module(f"{commands.__name__}.{name}") for name in names]
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
+
+    def error(self, message):
+        self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="springsim",
         description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
                     "of integrators. `springsim COMMAND --help` tells more.")
@@ -30,16 +42,50 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every half-written file is removed on the way out."""
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return args.handler(args)
-    except (SceneError, SimulationDiverged) as error:
+        with terminate_like_interrupt(), quiet_overflow():
+            return args.handler(args)
+    except (SceneError, SimulationDiverged, OutputFailed) as error:
         print(f"springsim {args.command}: {error}", file=sys.stderr)
-        return 2 if isinstance(error, SceneError) else 3
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+        return (BAD_INPUT if isinstance(error, SceneError)
+                else DIVERGED if isinstance(error, SimulationDiverged) else WRITE_FAILED)
+    except KeyboardInterrupt as interrupt:
+        terminated = isinstance(interrupt, Terminated)
+        print("terminated" if terminated else "interrupted", file=sys.stderr)
+        return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+@contextlib.contextmanager
+def terminate_like_interrupt():
+    """While a command runs, SIGTERM raises Terminated (in the main thread only: elsewhere
+    Python cannot install handlers, and the caller keeps its own)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+def quiet_overflow():
+    """A blowing-up state overflows on its way to the divergence check; that one line is the
+    answer, so NumPy's overflow and invalid-value warnings are not printed before it."""
+    import numpy as np
+
+    return np.errstate(over="ignore", invalid="ignore", divide="ignore")
 
 
 if __name__ == "__main__":

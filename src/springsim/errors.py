@@ -10,7 +10,22 @@ class SceneError(ValueError):
 
     def __init__(self, key: str, value, allowed: str):
         self.key, self.value, self.allowed = key, value, allowed
-        super().__init__(f"{key} = {value!r}: {allowed}")
+        super().__init__(one_line(f"{key} = {value!r}: {allowed}"))
+
+
+class OutputFailed(OSError):
+    """A file could not be written (disk full, folder removed, writer failed); the previous file
+    at ``path``, if any, is left as it was."""
+
+    def __init__(self, path, reason):
+        self.path, self.reason = str(path), reason
+        text = reason.strerror if isinstance(reason, OSError) and reason.strerror else reason
+        super().__init__(getattr(reason, "errno", None),
+                         one_line(f"could not write {self.path}: {text}; any previous file "
+                                  f"there is unchanged"))
+
+    def __str__(self):
+        return self.strerror
 
 
 class SimulationDiverged(RuntimeError):
@@ -36,6 +51,12 @@ def _more_stable(integrator: str) -> str:
     return "a more stable integrator (rk4, or implicit_euler for large steps)"
 
 
+def one_line(text: str) -> str:
+    """``text`` with line breaks and other control characters escaped (as repr writes them), so
+    that an error is one line whatever a user's key or file name holds."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 def is_finite(value) -> bool:
     """True for a finite number or an array of finite numbers; False for anything else."""
     try:
@@ -48,3 +69,12 @@ def require(condition: bool, key: str, value, allowed: str) -> None:
     """Raise a SceneError for ``key`` unless ``condition`` holds."""
     if not condition:
         raise SceneError(key, value, allowed)
+
+
+MAX_ANGLE = 1e6   # degrees; beyond, float64 rounding leaves no meaningful angle (2778 turns)
+
+
+def require_angle(value, key: str) -> None:
+    """An angle in degrees: finite and within +-MAX_ANGLE."""
+    require(is_finite(value) and np.ndim(value) == 0 and abs(float(value)) <= MAX_ANGLE, key,
+            value, f"must be a finite angle in degrees, between -{MAX_ANGLE:g} and {MAX_ANGLE:g}")

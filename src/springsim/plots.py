@@ -3,7 +3,8 @@ no change to the global backend of a program that imports springsim."""
 from pathlib import Path
 
 from .errors import require
-from .recording import Recording, atomic_output
+from .recording import Recording
+from .safe_files import atomic_output
 
 IMAGE_FORMATS = ("png", "pdf", "svg")
 

@@ -1,26 +1,18 @@
-"""Recording a run: the state sampled every 1/fps s of simulated time, and the NPZ file it goes to.
-
-Frame k is the state after ``round(k / (fps dt))`` steps, so the simulation advances in whole
-steps, one compiled call per frame, and ``time`` holds the exact simulated time of each frame
-(within dt/2 of k/fps). Frame 0 is the state the recording starts from (t = 0 for a fresh
-simulation); the last frame is at ``duration``. When 1/fps is shorter than dt, neighbouring frames
-repeat a state: the frame count, and so a video's pace, stays that of the fps asked for.
+"""Recording a run: the state at each frame of the one frame sampler (``sampling.py``: frame k is
+the state after ``round(k / (fps dt))`` steps, the last at ``duration``), and the NPZ file it goes
+to, written whole or not at all (``safe_files.py``). The simulation advances in whole steps, one
+compiled call per frame, and ``time`` holds the exact simulated time of each frame.
 """
-import contextlib
-import math
-import os
 import sys
-import tempfile
 import time
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from .energy import gravitational_energy, kinetic_energy, spring_energy
-from .errors import require
+from .safe_files import atomic_output
+from .sampling import frame_steps
 
-# A recording may take at most this share of the machine's memory (two (F, P, 3) float64 arrays).
-MEMORY_SHARE = 0.5
 
 
 @dataclass
@@ -104,20 +96,19 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
     """
     from tqdm import tqdm
 
-    frame_steps = frame_schedule(duration, fps, simulation.dt)
-    check_memory(len(frame_steps), simulation.model.particle_count, fps)
+    steps = frame_steps(duration, fps, simulation.dt, simulation.model.particle_count)
     if start is None:
-        recording, first = Recording.empty(simulation, len(frame_steps), fps), 1
+        recording, first = Recording.empty(simulation, len(steps), fps), 1
         recording.capture(0, simulation)
     else:
         recording, first = start
     simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
     started = time.perf_counter() - recording.wall_seconds
-    with tqdm(total=int(frame_steps[-1]), initial=int(frame_steps[first - 1]), unit="step",
+    with tqdm(total=int(steps[-1]), initial=int(steps[first - 1]), unit="step",
               desc=simulation.scene.name, leave=False, file=sys.stderr,
               disable=None if progress else True) as bar:
-        for frame in range(first, len(frame_steps)):
-            count = int(frame_steps[frame] - frame_steps[frame - 1])
+        for frame in range(first, len(steps)):
+            count = int(steps[frame] - steps[frame - 1])
             step_started = time.perf_counter()
             simulation.step(count)
             recording.step_seconds += time.perf_counter() - step_started
@@ -128,32 +119,6 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
                 on_frame(recording, frame)
     recording.wall_seconds = time.perf_counter() - started
     return recording
-
-
-def frame_schedule(duration: float, fps: float, dt: float) -> np.ndarray:
-    """The step count at each frame: frame k at time k/fps, rounded to a whole step."""
-    require(math.isfinite(fps) and fps > 0, "fps", fps, "must be > 0 frames per simulated second")
-    require(math.isfinite(duration) and duration >= 0, "duration", duration, "must be >= 0 s")
-    require(duration / dt < 2.0 ** 53, "dt", dt,
-            f"is too small for a {duration:g} s run (more than 2^53 steps): use a larger dt")
-    intervals = math.floor(duration * fps + 1e-9)   # 1e-9: 8 s * 60 fps is 480 intervals
-    times = np.arange(intervals + 1) / fps
-    if duration - times[-1] > dt / 2:
-        times = np.append(times, duration)          # a last, shorter interval ends at duration
-    return np.rint(times / dt).astype(np.int64)
-
-
-def check_memory(frame_count: int, particle_count: int, fps: float) -> None:
-    """Refuse up front a recording that cannot fit in memory (positions and velocities)."""
-    needed = 2 * frame_count * particle_count * 3 * 8
-    try:
-        available = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):
-        return  # no way to tell on this system; let NumPy try
-    require(needed <= MEMORY_SHARE * available, "fps", fps,
-            f"recording {frame_count} frames of {particle_count} particles needs "
-            f"{needed / 1e9:.1f} GB of the machine's {available / 1e9:.1f} GB; lower --fps or "
-            f"--duration (`springsim bench` times large models without recording them)")
 
 
 def deepest_penetration(model, x: np.ndarray) -> float:
@@ -173,32 +138,3 @@ def write_npz(path, arrays: dict) -> None:
     """Write ``arrays`` to the NPZ file ``path``, whole or not at all."""
     with atomic_output(path) as file:
         np.savez(file, **arrays)
-
-
-@contextlib.contextmanager
-def atomic_output(path):
-    """A binary file that becomes ``path`` only if the block finishes without an error.
-
-    It is written beside ``path`` (so that ``os.replace`` is a rename on one file system, which is
-    atomic) and removed on any error, so a reader sees the old file or the new one, never half.
-    """
-    path = os.path.abspath(os.fspath(path))
-    handle, temporary = tempfile.mkstemp(dir=os.path.dirname(path),
-                                         prefix=f".{os.path.basename(path)}.", suffix=".part")
-    try:
-        with os.fdopen(handle, "wb") as file:
-            yield file
-            file.flush()
-            os.fsync(file.fileno())
-        os.chmod(temporary, 0o666 & ~_umask())  # mkstemp makes it private; give it the usual mode
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask

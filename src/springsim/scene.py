@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import is_finite, require
+from .sampling import check_duration
+from .sizes import check_scene_size
 
 
 @dataclass
@@ -39,8 +41,7 @@ class Scene:
         require(self.integrator in integrator_names(), "integrator", self.integrator,
                 "must be one of " + ", ".join(integrator_names()))
         require(is_finite(self.dt) and self.dt > 0, "dt", self.dt, "must be a time step > 0 s")
-        require(is_finite(self.duration) and self.duration >= 0, "duration", self.duration,
-                "must be >= 0 s")
+        check_duration(self.duration)
         require(np.shape(self.gravity) == (3,) and is_finite(self.gravity), "gravity",
                 self.gravity, "must be three finite numbers (m/s^2)")
         require(is_finite(self.drag) and self.drag >= 0, "drag", self.drag, "must be >= 0 N s/m")
@@ -49,6 +50,19 @@ class Scene:
             body.validate(f"bodies.{i}")
         for t, terrain in enumerate(self.terrains):
             terrain.validate(f"terrains.{t}")
+        self.validate_implicit_settings()
+        check_scene_size(self)   # before anything is allocated
+
+    def validate_implicit_settings(self) -> None:
+        """``[implicit]`` is checked whatever the integrator (a scene may switch to one that
+        uses it): each integrator that takes these settings checks them as it would use them."""
+        from .integrators import REGISTRY
+
+        for integrator in REGISTRY.values():
+            accepted = [name for name in getattr(integrator, "OPTIONS", ())
+                        if hasattr(self.implicit, name)]
+            if accepted:
+                integrator(**{name: getattr(self.implicit, name) for name in accepted})
 
 
 def check_bodies_outside_terrains(model) -> None:

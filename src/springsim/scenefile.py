@@ -35,6 +35,8 @@ import dataclasses
 import json
 import math
 import numbers
+import os
+import stat
 import tomllib
 import types
 import typing
@@ -52,6 +54,8 @@ from .scene import Scene
 from .terrains import TERRAIN_TYPES
 
 BODY_TYPES = {"cube": Cube, "cloth": Cloth, "balls": Balls}
+
+MAX_SCENE_BYTES = 16 * 2 ** 20   # a scene file is a few kB; 16 MB leaves room for mesh tables
 
 # Scene fields that hold a list of tables, each with a ``type`` chosen from a registry.
 TYPED_LISTS = {"bodies": ("body", BODY_TYPES), "terrains": ("terrain", TERRAIN_TYPES)}
@@ -75,7 +79,7 @@ def load_scene(name_or_path, overrides=()) -> Scene:
 
 def read_scene_file(path: Path) -> Scene:
     try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
+        table = tomllib.loads(read_text_safely(path))
     except FileNotFoundError:
         raise SceneError("scene", str(path), "no such file; give a .toml scene file or one of "
                          + ", ".join(PRESETS)) from None
@@ -85,6 +89,38 @@ def read_scene_file(path: Path) -> Scene:
         raise SceneError("scene", str(path), f"is not valid TOML: {error}") from None
     # A file that does not name its scene is named after itself (and so is its output).
     return scene_from_table({"name": path.stem, **table})
+
+
+def read_text_safely(path: Path) -> str:
+    """The text of a regular file of at most MAX_SCENE_BYTES, checked before it is read.
+
+    Opened without blocking (a FIFO would wait for a writer) and checked on the open file (not on
+    the name, which could change in between): a FIFO, a device (a link to /dev/zero), a folder or
+    a file over the limit is refused with one line.
+    """
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        status = os.fstat(descriptor)
+        require(stat.S_ISREG(status.st_mode), "scene", str(path),
+                f"is {_file_kind(status.st_mode)}, not a regular file; give a .toml scene file")
+        require(status.st_size <= MAX_SCENE_BYTES, "scene", str(path),
+                f"is {status.st_size:,} bytes; a scene file may have at most "
+                f"{MAX_SCENE_BYTES:,} ({MAX_SCENE_BYTES // 2**20} MB)")
+        data = b""
+        while len(data) <= MAX_SCENE_BYTES and (chunk := os.read(descriptor, 2 ** 20)):
+            data += chunk
+    finally:
+        os.close(descriptor)
+    require(len(data) <= MAX_SCENE_BYTES, "scene", str(path),
+            f"grew beyond {MAX_SCENE_BYTES:,} bytes while being read")
+    return data.decode("utf-8")
+
+
+def _file_kind(mode: int) -> str:
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+             (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISSOCK, "a socket"))
+    return next((name for test, name in kinds if test(mode)), "not a regular file")
 
 
 def scene_from_table(table: dict) -> Scene:
@@ -203,7 +239,7 @@ def typed_item(value, list_name: str, current, key: str):
     if "type" not in value and current is not None:
         return merge_table(current, value, key)
     kind = value.get("type")
-    require(kind in registry, f"{key}.type", kind,
+    require(isinstance(kind, str) and kind in registry, f"{key}.type", kind,
             f"a {label} type must be one of " + ", ".join(registry))
     rest = {name: item for name, item in value.items() if name != "type"}
     return merge_table(registry[kind](), rest, key)

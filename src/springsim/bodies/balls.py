@@ -61,6 +61,10 @@ class Balls:
             value = getattr(self, name)
             require(is_finite(value) and value >= 0, f"{key}.{name}", value, f"must be >= 0{unit}")
 
+    def counts(self) -> tuple[int, int]:
+        """Particles (one per ball) and springs (none)."""
+        return len(self.balls), 0
+
     def build(self) -> BuiltBody:
         balls = [as_ball(ball, "balls") for ball in self.balls]
         count = len(balls)

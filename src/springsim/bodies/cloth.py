@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import is_finite, require
+from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
 from .cube import grid_triangles
@@ -71,8 +71,7 @@ class Cloth:
                     "must be three finite numbers")
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
-        require(is_finite(self.rotation_degrees), f"{key}.rotation_degrees",
-                self.rotation_degrees, "must be a finite angle in degrees")
+        require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
         for kind in ("structural", "shear", "bend"):
             getattr(self, kind).validate(f"{key}.{kind}")
         self._validate_pinned(key)
@@ -89,6 +88,11 @@ class Cloth:
             whole = isinstance(index, (int, np.integer)) and not isinstance(index, bool)
             require(whole and 0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must be whole numbers in [0, {count - 1}]")
+
+    def counts(self) -> tuple[int, int]:
+        """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone."""
+        n = self.particles_per_edge
+        return n * n, 2 * n * (n - 1) + 2 * (n - 1) ** 2 + 2 * n * max(n - 2, 0)
 
     def build(self) -> BuiltBody:
         n = self.particles_per_edge

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import require
+from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
 
@@ -53,17 +53,32 @@ class Cube:
                 f"{key}.particles_per_edge", n,
                 "needs >= 4 for face springs (below that they duplicate structural or bend "
                 "springs; or set face_springs = false)")
-        require(self.edge_length > 0, f"{key}.edge_length", self.edge_length, "must be > 0 m")
-        require(self.particle_mass > 0, f"{key}.particle_mass", self.particle_mass,
-                "must be > 0 kg")
+        require(is_finite(self.edge_length) and self.edge_length > 0, f"{key}.edge_length",
+                self.edge_length, "must be > 0 m")
+        require(is_finite(self.particle_mass) and self.particle_mass > 0,
+                f"{key}.particle_mass", self.particle_mass, "must be > 0 kg")
+        for name in ("position", "velocity", "rotation_axis"):
+            value = getattr(self, name)
+            require(np.shape(value) == (3,) and is_finite(value), f"{key}.{name}", value,
+                    "must be three finite numbers")
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
+        require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
         for kind in ("structural", "shear", "bend", "face"):
             getattr(self, kind).validate(f"{key}.{kind}")
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
+
+    def counts(self) -> tuple[int, int]:
+        """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone."""
+        n = self.particles_per_edge
+        springs = (3 * n * n * (n - 1)                                     # structural
+                   + 6 * n * (n - 1) ** 2 + 4 * (n - 1) ** 3                # shear
+                   + 3 * n * n * max(n - 2, 0)                              # bend
+                   + 3 * n * n * self.face_springs)                         # face
+        return n ** 3, springs
 
     def build(self) -> BuiltBody:
         n = self.particles_per_edge

@@ -5,6 +5,8 @@ from .run import add_scene_arguments, scene_from_arguments
 
 NAME = "bench"
 HELP = "time an integrator on a scene: steps/s, ms per step, real-time factor, build time, memory"
+MAX_STEPS = 10 ** 9        # a billion steps: days for a large model, hours for a small one
+MAX_SECONDS = 3600.0       # wall seconds of timing
 
 
 def add_arguments(parser) -> None:
@@ -20,7 +22,12 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..benchmark import benchmark
+    from ..errors import is_finite, require
 
+    require(args.steps is None or 1 <= args.steps <= MAX_STEPS, "steps", args.steps,
+            f"must be a whole number of steps from 1 to {MAX_STEPS:,}")
+    require(args.seconds is None or (is_finite(args.seconds) and 0 < args.seconds <= MAX_SECONDS),
+            "seconds", args.seconds, f"must be > 0 s and at most {MAX_SECONDS:g} s")
     result = benchmark(scene_from_arguments(args), steps=args.steps, seconds=args.seconds)
     print(json.dumps(result) if args.json else "\n".join(report_lines(result)))
     return 0

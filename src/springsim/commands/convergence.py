@@ -1,7 +1,9 @@
 """`springsim convergence`: the measured order of accuracy of each integrator."""
+import math
 import time
 
 NAME = "convergence"
+MAX_FINAL_TIME = 60.0   # s: the reference solve and the smallest steps grow with it
 HELP = ("measured order of accuracy of each integrator against SciPy's DOP853 on a squeezed "
         "cube: fitted slopes and a log-log plot")
 
@@ -19,14 +21,17 @@ def run(args) -> int:
     from ..convergence import FINAL_TIME, measure_convergence
     from ..errors import require
     from ..integrators import integrator_names
+    from ..safe_files import check_output_path
 
     integrators = args.integrators or integrator_names()
     for name in integrators:
         require(name in integrator_names(), "integrator", name,
                 "must be one of " + ", ".join(integrator_names()))
     final_time = FINAL_TIME if args.final_time is None else args.final_time
-    require(final_time > 0, "final-time", final_time, "must be > 0 s")
+    require(math.isfinite(final_time) and 0 < final_time <= MAX_FINAL_TIME, "final-time",
+            final_time, f"must be a time > 0 s and at most {MAX_FINAL_TIME:g} s")
     require(args.png.lower().endswith(".png"), "png", args.png, "must end in .png")
+    check_output_path("--png", args.png)
     started = time.perf_counter()
     results = measure_convergence(integrators, final_time)
     elapsed = time.perf_counter() - started

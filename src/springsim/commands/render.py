@@ -16,8 +16,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--duration", type=float, metavar="SECONDS",
                         help="simulated time in s (default: the scene's duration)")
     parser.add_argument("--fps", type=float, default=30.0,
-                        help="video frames per second, one every round(1/(fps dt)) steps "
-                             "(default: 30)")
+                        help="video frames per second; frame k is the state after round(k/(fps dt)) "
+                             "steps (default: 30)")
     parser.add_argument("--width", type=int, default=960, help="pixels (default: 960)")
     parser.add_argument("--height", type=int, default=540, help="pixels (default: 540)")
     parser.add_argument("--camera", default="auto",
@@ -34,15 +34,19 @@ def run(args) -> int:
     from ..render import CAMERA_NAMES, DrawOptions, RenderUnavailable, render_video
     from ..render.frames import simulate_frames
     from ..render.video import check_output
+    from ..sampling import plan_frames
     from ..simulation import Simulation
+    from ..sizes import scene_counts
     from .run import scene_from_arguments
 
     # everything is checked before simulating, so that a long run never ends in a typo
     require(args.camera in CAMERA_NAMES, "--camera", args.camera,
             "must be one of " + ", ".join(CAMERA_NAMES))
     draw = DrawOptions.only([name.strip() for name in args.draw.split(",") if name.strip()])
-    check_output(args.out, args.width, args.height, args.fps)
-    sim = Simulation(scene_from_arguments(args))
+    check_output(args.out, args.width, args.height, args.fps, key="--out")
+    scene = scene_from_arguments(args)
+    plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
+    sim = Simulation(scene)
     times, positions = simulate_frames(sim, sim.scene.duration, args.fps,
                                        progress=not args.quiet)
     try:

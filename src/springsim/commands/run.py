@@ -1,10 +1,10 @@
 """`springsim run`: simulate a scene with a progress bar, print a summary, save the frames."""
-import os
 import re
 import sys
 
 NAME = "run"
 HELP = "simulate a scene and save its frames (positions, velocities, energies) as an NPZ file"
+MAX_DEFAULT_NAME = 120   # bytes of a scene name kept in the default output's name
 
 
 DEFAULT_FPS = 60.0
@@ -47,8 +47,11 @@ def add_scene_arguments(parser, scene_optional: bool = False) -> None:
 
 def scene_from_arguments(args):
     """The scene with --set applied, then --integrator, --dt and --duration where given."""
+    from ..sampling import check_duration
     from ..scenefile import load_scene, toml_value
 
+    if getattr(args, "duration", None) is not None:
+        check_duration(args.duration)   # the frame sampler's rule, whatever TOML says of inf
     overrides = list(args.set)
     for key in ("integrator", "dt", "duration"):
         value = getattr(args, key, None)
@@ -62,6 +65,9 @@ def run(args) -> int:
     from ..errors import require
     from ..plots import plot_energy, plot_format
     from ..recording import write_npz
+    from ..safe_files import check_output_path
+    from ..sampling import plan_frames
+    from ..sizes import scene_counts
     from ..simulation import Simulation
     from ..summary import summary_lines
 
@@ -73,15 +79,17 @@ def run(args) -> int:
         check_interval(args.checkpoint_every)
     scene = resumed.scene if resumed else scene_from_arguments(args)
     out = args.out or default_output(scene.name)
-    # Every output is checked before simulating, so that a long run never ends in a typo.
-    for option, path in (("--out", out), ("--plot", args.plot), ("--video", args.video)):
-        if path:
-            check_output_path(option, path)
+    # Every output and the frames' memory are checked before simulating, so that a long run
+    # never ends in a typo or an allocation the machine cannot hold.
+    check_output_path("--out", out)
     if args.plot:
+        check_output_path("--plot", args.plot)
         plot_format(args.plot)
     if args.video:
         from ..render.video import output_format
-        output_format(args.video, key="--video")
+        check_output_path("--video", args.video,
+                          folder=output_format(args.video, key="--video") == "png folder")
+    plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
 
     simulation = Simulation(scene)
     recording = record_run(simulation, args, out, resumed)   # record, with checkpoints
@@ -120,16 +128,8 @@ def write_video_of(simulation, recording, path) -> str | None:
 
 
 def default_output(scene_name: str) -> str:
-    """``<scene name>.npz`` in the current folder; characters unsafe in a file name become _."""
-    safe = re.sub(r"[^\w.-]+", "_", scene_name).strip("._")
+    """``<scene name>.npz`` in the current folder; characters unsafe in a file name become _,
+    and a name too long for a file system is shortened."""
+    safe = re.sub(r"[^\w.-]+", "_", scene_name)
+    safe = safe.encode()[:MAX_DEFAULT_NAME].decode(errors="ignore").strip("._")
     return f"{safe or 'scene'}.npz"
-
-
-def check_output_path(option: str, path: str) -> None:
-    """The folder a file goes to must exist (a video may also be a folder of PNG frames)."""
-    from ..errors import require
-
-    folder = os.path.dirname(os.path.abspath(path))
-    require(os.path.isdir(folder), option, path, f"the folder {folder} does not exist")
-    require(option == "--video" or not os.path.isdir(path), option, path,
-            "is a folder; give a file name")

@@ -34,6 +34,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..errors import require
     from ..integrators import integrator_names
+    from ..safe_files import check_output_path
     from ..scenefile import load_scene
     from ..stability import find_stability_limit
 
@@ -45,6 +46,8 @@ def run(args) -> int:
     for scene in scenes:
         load_scene(scene)   # a misspelt scene fails now, not after minutes of trials
     require(args.png.lower().endswith(".png"), "png", args.png, "must end in .png")
+    check_output_path("--csv", args.csv)
+    check_output_path("--png", args.png)
     seconds = args.seconds if args.seconds is not None else (QUICK["seconds"] if args.quick
                                                              else 3.0)
     tolerance = args.tolerance if args.tolerance is not None else (QUICK["tolerance"]

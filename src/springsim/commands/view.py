@@ -23,9 +23,17 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from ..errors import require
     from ..render import RenderUnavailable
+    from ..render.video import check_frame_size
+    from ..safe_files import check_output_folder, check_output_path
     from ..viewer.controls import Controls
 
+    check_frame_size(args.width, args.height)
+    check_output_folder("--record-folder", args.record_folder)
+    if args.screenshot:
+        check_output_path("--screenshot", args.screenshot)
+    require(args.frames is None or args.frames >= 0, "--frames", args.frames, "must be >= 0")
     controls = Controls(args.scene, integrator=args.integrator, dt=args.dt)
     try:
         from ..viewer.window import Viewer
@@ -54,8 +62,8 @@ def run(args) -> int:
 def save_screenshot(path) -> None:
     import imageio.v3 as iio
 
-    from ..recording import atomic_output
     from ..render.backend import capture
+    from ..safe_files import atomic_output
 
     with atomic_output(path) as file:
         iio.imwrite(file, capture(include_ui=True), extension=".png")
