@@ -4,11 +4,13 @@ import numpy as np
 from .._jit import kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 
 @kernel
-def explicit_euler_step(model, x, v, h, a, columns):
+def explicit_euler_step(model, state, scratch, h):
+    x, v = state
+    a, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x, x, h, v)
     add_scaled(v, v, h, a)
@@ -16,14 +18,8 @@ def explicit_euler_step(model, x, v, h, a, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a = np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        explicit_euler_step(model, x, v, h, a, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    return drive(explicit_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
+                 steps)
 
 
 @register

@@ -37,7 +37,7 @@ from ..implicit.constraints import (find_constraints, hold_all_constrained, hold
 from ..implicit.jacobian import add_stiffness_product, assemble_system, particle_mass
 from ..implicit.pattern import build_block_pattern
 from . import Integrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
 
@@ -133,6 +133,17 @@ def workspace(pattern, x):
 
 
 @kernel
+def implicit_euler_step(model, state, scratch, h):
+    """backward_euler_step as the driver calls it: the state carries the contacts
+    (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
+    statistics."""
+    x, v, kind, terrain, normal_floor, friction_damping = state
+    pattern, newton_iterations, tolerance, max_iterations, work, statistics = scratch
+    backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
+                        work, kind, terrain, normal_floor, friction_damping, statistics)
+
+
+@kernel
 def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_iterations,
             kind, terrain, normal_floor, friction_damping, statistics):
     """Take ``steps`` steps; returns (steps done, first diverged particle or -1).
@@ -140,15 +151,10 @@ def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_it
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
     call) to the next; statistics[0] and [1] count the conjugate-gradient iterations and the
     linear solves."""
-    work = workspace(pattern, x)
-    for step in range(steps):
-        backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance,
-                            max_iterations, work, kind, terrain, normal_floor, friction_damping,
-                            statistics)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    scratch = (pattern, newton_iterations, tolerance, max_iterations, workspace(pattern, x),
+               statistics)
+    return drive(implicit_euler_step, model, (x, v, kind, terrain, normal_floor,
+                                              friction_damping), scratch, h, steps)
 
 
 @register

@@ -8,11 +8,13 @@ import numpy as np
 from .._jit import kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 
 @kernel
-def midpoint_step(model, x, v, h, a, x_mid, v_mid, columns):
+def midpoint_step(model, state, scratch, h):
+    x, v = state
+    a, x_mid, v_mid, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_mid, x, h / 2, v)
     add_scaled(v_mid, v, h / 2, a)
@@ -23,14 +25,8 @@ def midpoint_step(model, x, v, h, a, x_mid, v_mid, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a, x_mid, v_mid = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        midpoint_step(model, x, v, h, a, x_mid, v_mid, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
+    return drive(midpoint_step, model, (x, v), scratch, h, steps)
 
 
 @register

@@ -13,11 +13,13 @@ import numpy as np
 from .._jit import kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 
 @kernel
-def predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns):
+def predict_reevaluate_step(model, state, scratch, h):
+    x, v = state
+    a, x_p, v_p, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_p, x, h, v)
     add_scaled(v_p, v, h, a)
@@ -28,14 +30,8 @@ def predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a, x_p, v_p = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
+    return drive(predict_reevaluate_step, model, (x, v), scratch, h, steps)
 
 
 @register
