@@ -21,12 +21,12 @@ ROWS = {
 }
 
 
-def measure(name, steps, dt=1 / 60, threads=None):
+def measure(name, steps, dt=1 / 60, threads=None, skip=0):
     scene_name, overrides = ROWS[name]
     scene = load_scene(scene_name, overrides)
     options = {} if threads is None else {"threads": threads}
     simulation = Simulation(scene, integrator="implicit_euler", dt=dt, **options)
-    simulation.step(1)
+    simulation.step(1 + skip)
     before = simulation.integrator.statistics.copy()
     started = time.perf_counter()
     simulation.step(steps)
@@ -40,10 +40,11 @@ def measure(name, steps, dt=1 / 60, threads=None):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=30)
+    parser.add_argument("--skip", type=int, default=0, help="untimed steps first")
     parser.add_argument("--rows", default="cloth25,cloth100,cube10,cube30")
     args = parser.parse_args()
     for name in args.rows.split(","):
-        r = measure(name, args.steps)
+        r = measure(name, args.steps, skip=args.skip)
         print(f"{r['row']:9s} {r['particles']:7d} particles  {r['ms_per_step']:8.2f} ms/step  "
               f"{r['cg_per_step']:7.1f} CG iterations/step  {r['solves_per_step']:.2f} solves/step",
               flush=True)

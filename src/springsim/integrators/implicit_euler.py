@@ -31,7 +31,7 @@ from ..errors import require, SceneError
 from ..forces import force_columns, spring_forces
 from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
                                      newton_iterations_needed, update_ball_contacts)
-from ..implicit.cg import conserve_momentum, contact_cg, system_multiply
+from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     restore_impact_speeds, set_friction_damping, update_contacts)
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
@@ -64,6 +64,7 @@ def solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v, dv, h, 
     """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
     ball-particle contacts (implicit.ball_contact) between solves. Returns the
     conjugate-gradient iterations taken and the number of solves."""
+    mass_start(pattern, blocks, terms, balls, rhs, kind, normal, model.inv_mass, ddv, r, s, q)
     iterations, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
                                        tolerance, max_iterations, 0.0, r, s, c, q)
     conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
