@@ -77,4 +77,13 @@ def inline_kernel(function):
     kernels passes each array with a reference count up and down, about 35 ns, which can be a
     hundred times the helper's own work. Helpers that take and return scalars need not be
     inlined this way: the compiler inlines them itself."""
-    return njit(inline="always", fastmath=FASTMATH_FLAGS, error_model="numpy")(function)
+    return njit(inline="always", cache=True, fastmath=FASTMATH_FLAGS,
+                error_model="numpy")(function)
+
+
+def parallel_kernel(function):
+    """A kernel whose ``prange`` loops (its own, or those of the inline kernels it calls) run
+    on Numba's threads. Only ever called from Python: a cached kernel that calls a parallel one
+    crashes when loaded from the cache (numba#8578)."""
+    return njit(parallel=True, cache=True, fastmath=FASTMATH_FLAGS,
+                error_model="numpy")(function)

@@ -5,7 +5,7 @@ import numpy as np
 
 from .energy import energies
 from .errors import SimulationDiverged, require
-from .integrators import get_integrator
+from .integrators import available_threads, get_integrator
 from .model import build_model
 from .scene import check_bodies_outside_terrains
 from .state import State
@@ -22,15 +22,29 @@ def integrator_settings(scene, overrides: dict) -> dict:
     return {**settings, **overrides}
 
 
+def check_threads(threads) -> int:
+    """threads, or all cores for None; one clear error for anything else."""
+    cores = available_threads()
+    if threads is None:
+        return cores
+    require(isinstance(threads, (int, np.integer)) and not isinstance(threads, bool)
+            and 1 <= threads <= cores, "threads", threads,
+            f"must be a whole number from 1 to {cores} (this machine's cores)")
+    return int(threads)
+
+
 class Simulation:
     """Simulate ``scene`` with ``integrator`` (a registered name) and time step ``dt`` (s).
 
     Both default to the scene's own. ``integrator_options`` go to the integrator and win over the
     scene's ``implicit`` settings (for example ``newton_iterations=2`` for implicit_euler).
+    ``threads`` is the most threads a step may use (default: all cores); results are the same
+    for any number.
     """
 
     def __init__(self, scene, integrator: str | None = None, dt: float | None = None,
-                 **integrator_options):
+                 threads: int | None = None, **integrator_options):
+        self.threads = check_threads(threads)
         if integrator is not None:
             scene.integrator = integrator
         if dt is not None:
@@ -61,7 +75,8 @@ class Simulation:
         """Take ``count`` steps of size dt in one compiled call."""
         require(self.dt > 0 and math.isfinite(self.dt), "dt", self.dt, "must be > 0 s")
         require(count >= 0, "steps", count, "must be >= 0")
-        done, particle = self.integrator.advance(self.model, self.state, self.dt, count)
+        done, particle = self.integrator.advance(self.model, self.state, self.dt, count,
+                                                 self.threads)
         self.state.time += done * self.dt
         self.steps_taken += done
         if particle >= 0:

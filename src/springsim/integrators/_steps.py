@@ -15,16 +15,16 @@ dynamic globals"). Inlined into each method's own ``advance``, the step function
 that kernel, which caches as any other (benchmarks/driver_cache.py checks it).
 """
 import numpy as np
-from numba import njit
+from numba import prange
 
-from .._jit import FASTMATH_FLAGS, kernel
+from .._jit import inline_kernel, kernel
 from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
 
-@njit(inline="always", fastmath=FASTMATH_FLAGS, error_model="numpy")
+@inline_kernel
 def drive(step, model, state, scratch, h, steps):
     """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1)."""
     x, v = state[0], state[1]
@@ -36,10 +36,10 @@ def drive(step, model, state, scratch, h, steps):
     return steps, -1
 
 
-@kernel
+@inline_kernel
 def add_scaled(out, x, alpha, y):
     """out = x + alpha * y, elementwise, with no temporary array."""
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         for c in range(3):
             out[i, c] = x[i, c] + alpha * y[i, c]
 

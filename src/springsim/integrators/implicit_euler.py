@@ -197,7 +197,8 @@ class ImplicitEuler(Integrator):
             self._pattern = build_solve_layout(model.arrays)
         return self._pattern
 
-    def advance(self, model, state, dt, steps):
+    def advance(self, model, state, dt, steps, threads=1):
+        # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
         # the contacts carried between steps live in the state (state.ContactMemory)
         done, particle = advance(model.arrays, self.pattern(model), state.positions,
                                  state.velocities, float(dt), int(steps), self.newton_iterations,

@@ -5,13 +5,13 @@
 """
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, drive
 
 
-@kernel
+@inline_kernel
 def midpoint_step(model, state, scratch, h):
     x, v = state
     a, x_mid, v_mid, columns = scratch
@@ -29,9 +29,17 @@ def advance(model, x, v, h, steps):
     return drive(midpoint_step, model, (x, v), scratch, h, steps)
 
 
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
+    return drive(midpoint_step, model, (x, v), scratch, h, steps)
+
+
 @register
 class Midpoint(KernelIntegrator):
     name = "midpoint"
     order = 2
     summary = "explicit midpoint (RK2): derivative at a half-step state"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

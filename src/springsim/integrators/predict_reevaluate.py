@@ -10,13 +10,13 @@ explicit Euler's. Kept to compare with the course framework; ``implicit_euler`` 
 """
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, drive
 
 
-@kernel
+@inline_kernel
 def predict_reevaluate_step(model, state, scratch, h):
     x, v = state
     a, x_p, v_p, columns = scratch
@@ -34,9 +34,17 @@ def advance(model, x, v, h, steps):
     return drive(predict_reevaluate_step, model, (x, v), scratch, h, steps)
 
 
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
+    return drive(predict_reevaluate_step, model, (x, v), scratch, h, steps)
+
+
 @register
 class PredictReevaluate(KernelIntegrator):
     name = "predict_reevaluate"
     order = 1
     summary = "the course framework's 'implicit' Euler: explicit predict, re-evaluate, step"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

@@ -8,13 +8,13 @@ stages accumulates in (dx, dv).
 """
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, drive
 
 
-@kernel
+@inline_kernel
 def rk4_step(model, state, scratch, h):
     x, v = state
     x_k, v_k, a, dx, dv, columns = scratch
@@ -52,9 +52,16 @@ def advance(model, x, v, h, steps):
     return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
 
 
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
+
+
 @register
 class RK4(KernelIntegrator):
     name = "rk4"
     order = 4
     summary = "classical fourth-order Runge-Kutta"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

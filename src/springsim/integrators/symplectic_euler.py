@@ -1,13 +1,13 @@
 """Symplectic (semi-implicit) Euler: v' = v + h a(x, v), then x' = x + h v'. First order."""
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
 from ._steps import add_scaled, drive
 
 
-@kernel
+@inline_kernel
 def symplectic_euler_step(model, state, scratch, h):
     x, v = state
     a, columns = scratch
@@ -22,9 +22,17 @@ def advance(model, x, v, h, steps):
                  steps)
 
 
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(symplectic_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
+                 steps)
+
+
 @register
 class SymplecticEuler(KernelIntegrator):
     name = "symplectic_euler"
     order = 1
     summary = "semi-implicit Euler: new velocity first, then positions with it"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)
