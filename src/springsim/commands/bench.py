@@ -21,7 +21,8 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..benchmark import benchmark
 
-    result = benchmark(scene_from_arguments(args), steps=args.steps, seconds=args.seconds)
+    result = benchmark(scene_from_arguments(args), steps=args.steps, seconds=args.seconds,
+                       threads=args.threads)
     print(json.dumps(result) if args.json else "\n".join(report_lines(result)))
     return 0
 
@@ -38,7 +39,8 @@ def report_lines(result: dict) -> list[str]:
         ("peak memory", "unknown" if memory is None else f"{memory:.0f} MB"),
     ]
     heading = (f"{result['scene']}: {result['integrator']}, dt = {result['dt']:g} s, "
-               f"{result['particles']} particles, {result['springs']} springs")
+               f"{result['particles']} particles, {result['springs']} springs, "
+               f"{result['threads']} thread(s) allowed")
     return [heading] + [f"  {label:<18}{text}" for label, text in rows]
 
 

@@ -42,7 +42,7 @@ def run(args) -> int:
             "must be one of " + ", ".join(CAMERA_NAMES))
     draw = DrawOptions.only([name.strip() for name in args.draw.split(",") if name.strip()])
     check_output(args.out, args.width, args.height, args.fps)
-    sim = Simulation(scene_from_arguments(args))
+    sim = Simulation(scene_from_arguments(args), threads=args.threads)
     times, positions = simulate_frames(sim, sim.scene.duration, args.fps,
                                        progress=not args.quiet)
     try:

@@ -33,6 +33,9 @@ def add_scene_arguments(parser) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change one key of the scene, e.g. bodies.0.particles_per_edge=7 "
                              "(repeatable; see docs/scene-files.md)")
+    parser.add_argument("--threads", type=int, metavar="N",
+                        help="most threads a step may use (default: all cores; the results are "
+                             "the same for any number)")
 
 
 def scene_from_arguments(args):
@@ -65,7 +68,7 @@ def run(args) -> int:
         from ..render.video import output_format
         output_format(args.video, key="--video")
 
-    simulation = Simulation(scene)
+    simulation = Simulation(scene, threads=args.threads)
     recording = record(simulation, scene.duration, args.fps, progress=not args.quiet)
     write_npz(out, recording.arrays())
     written = [out]
