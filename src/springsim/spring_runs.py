@@ -137,13 +137,33 @@ def add_run_forces(model, columns):
 def add_stretch_forces(columns, a, b, count, rest_length, ks, kd, stop):
     """Springs (a + i, b + i) for i < count: each row read at a and at b as a contiguous slice;
     the second ends at or past ``stop`` (another partition's) are left out."""
+    # scratch in the rows of the first ends: this partition's own
+    fx, fy, fz = columns[9, a:a + count], columns[10, a:a + count], columns[11, a:a + count]
+    stretch_forces(columns, a, b, count, rest_length, ks, kd, fx, fy, fz)
+    fx_a, fy_a, fz_a = columns[6, a:a + count], columns[7, a:a + count], columns[8, a:a + count]
+    for i in range(count):
+        fx_a[i] += fx[i]
+        fy_a[i] += fy[i]
+        fz_a[i] += fz[i]
+    subtract_from_second_ends(columns, b, max(0, min(count, stop - b)), fx, fy, fz)
+
+
+@kernel
+def add_crossing_forces(columns, a, b, count, rest_length, ks, kd):
+    """Springs (a + i, b + i) for i < count: the force on the second ends alone."""
+    # scratch in the rows of the second ends: this partition's own
+    fx, fy, fz = columns[9, b:b + count], columns[10, b:b + count], columns[11, b:b + count]
+    stretch_forces(columns, a, b, count, rest_length, ks, kd, fx, fy, fz)
+    subtract_from_second_ends(columns, b, count, fx, fy, fz)
+
+
+@kernel
+def stretch_forces(columns, a, b, count, rest_length, ks, kd, fx, fy, fz):
+    """(fx, fy, fz)[i] = the force on a + i of spring (a + i, b + i), i < count."""
     x_a, y_a, z_a = columns[0, a:a + count], columns[1, a:a + count], columns[2, a:a + count]
     x_b, y_b, z_b = columns[0, b:b + count], columns[1, b:b + count], columns[2, b:b + count]
     vx_a, vy_a, vz_a = columns[3, a:a + count], columns[4, a:a + count], columns[5, a:a + count]
     vx_b, vy_b, vz_b = columns[3, b:b + count], columns[4, b:b + count], columns[5, b:b + count]
-    fx_a, fy_a, fz_a = columns[6, a:a + count], columns[7, a:a + count], columns[8, a:a + count]
-    # scratch in the rows of the first ends: this partition's own
-    fx, fy, fz = columns[9, a:a + count], columns[10, a:a + count], columns[11, a:a + count]
     for i in range(count):
         dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
         factor = spring_force_factor(dx, dy, dz, vx_a[i] - vx_b[i], vy_a[i] - vy_b[i],
@@ -152,32 +172,14 @@ def add_stretch_forces(columns, a, b, count, rest_length, ks, kd, stop):
             fx[i], fy[i], fz[i] = factor * dx, factor * dy, factor * dz
         else:   # a hole: no spring, so no force (not even NaN from a non-finite end)
             fx[i], fy[i], fz[i] = 0.0, 0.0, 0.0
-        fx_a[i] += fx[i]
-        fy_a[i] += fy[i]
-        fz_a[i] += fz[i]
-    # the b ends in a loop of their own: b + i may be a + j of another i, which the loop above
-    # could not vectorize across
-    own = max(0, min(count, stop - b))
-    fx_b, fy_b, fz_b = columns[6, b:b + own], columns[7, b:b + own], columns[8, b:b + own]
-    for i in range(own):
-        fx_b[i] -= fx[i]
-        fy_b[i] -= fy[i]
-        fz_b[i] -= fz[i]
 
 
 @kernel
-def add_crossing_forces(columns, a, b, count, rest_length, ks, kd):
-    """Springs (a + i, b + i) for i < count: the force on the second ends alone."""
-    x_a, y_a, z_a = columns[0, a:a + count], columns[1, a:a + count], columns[2, a:a + count]
-    x_b, y_b, z_b = columns[0, b:b + count], columns[1, b:b + count], columns[2, b:b + count]
-    vx_a, vy_a, vz_a = columns[3, a:a + count], columns[4, a:a + count], columns[5, a:a + count]
-    vx_b, vy_b, vz_b = columns[3, b:b + count], columns[4, b:b + count], columns[5, b:b + count]
+def subtract_from_second_ends(columns, b, count, fx, fy, fz):
+    """Force rows at b + i -= (fx, fy, fz)[i], i < count: in a loop of its own, since b + i may
+    be a + j of another i, which the loop over the springs could not vectorize across."""
     fx_b, fy_b, fz_b = columns[6, b:b + count], columns[7, b:b + count], columns[8, b:b + count]
     for i in range(count):
-        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
-        factor = spring_force_factor(dx, dy, dz, vx_a[i] - vx_b[i], vy_a[i] - vy_b[i],
-                                     vz_a[i] - vz_b[i], rest_length[i], ks, kd)
-        if rest_length[i] >= 0.0:
-            fx_b[i] -= factor * dx
-            fy_b[i] -= factor * dy
-            fz_b[i] -= factor * dz
+        fx_b[i] -= fx[i]
+        fy_b[i] -= fy[i]
+        fz_b[i] -= fz[i]
