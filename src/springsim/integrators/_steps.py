@@ -20,6 +20,7 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
+from ..forces import force_columns
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -34,6 +35,20 @@ def drive(step, model, state, scratch, h, steps):
         if particle >= 0:
             return done + 1, particle
     return steps, -1
+
+
+@kernel
+def one_stage_scratch(x):
+    """The scratch of a method with one force evaluation: the accelerations and the force
+    columns."""
+    return np.empty_like(x), force_columns(x)
+
+
+@kernel
+def two_stage_scratch(x):
+    """The scratch of a method with two: the accelerations, the stage's positions and
+    velocities, and the force columns."""
+    return np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x)
 
 
 @inline_kernel

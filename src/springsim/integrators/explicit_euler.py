@@ -1,10 +1,8 @@
 """Explicit (forward) Euler: x' = x + h v, v' = v + h a(x, v). First order."""
-import numpy as np
-
 from .._jit import inline_kernel, kernel, parallel_kernel
-from ..forces import accelerations, force_columns
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, drive
+from ._steps import add_scaled, drive, one_stage_scratch
 
 
 @inline_kernel
@@ -18,15 +16,13 @@ def explicit_euler_step(model, state, scratch, h):
 
 @kernel
 def advance(model, x, v, h, steps):
-    return drive(explicit_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
-                 steps)
+    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(explicit_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
-                 steps)
+    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
 
 
 @register

@@ -3,12 +3,10 @@
     x_mid = x + h/2 v,      v_mid = v + h/2 a(x, v)
     x'    = x + h v_mid,    v'    = v + h a(x_mid, v_mid)
 """
-import numpy as np
-
 from .._jit import inline_kernel, kernel, parallel_kernel
-from ..forces import accelerations, force_columns
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, drive
+from ._steps import add_scaled, drive, two_stage_scratch
 
 
 @inline_kernel
@@ -25,15 +23,13 @@ def midpoint_step(model, state, scratch, h):
 
 @kernel
 def advance(model, x, v, h, steps):
-    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
-    return drive(midpoint_step, model, (x, v), scratch, h, steps)
+    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
-    return drive(midpoint_step, model, (x, v), scratch, h, steps)
+    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @register

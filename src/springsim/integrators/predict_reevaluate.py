@@ -8,12 +8,10 @@ Every derivative it takes is known at the start of the step, so it is an explici
 order), not backward Euler; on the course framework's cube its stable range is about half of
 explicit Euler's. Kept to compare with the course framework; ``implicit_euler`` is the real thing.
 """
-import numpy as np
-
 from .._jit import inline_kernel, kernel, parallel_kernel
-from ..forces import accelerations, force_columns
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, drive
+from ._steps import add_scaled, drive, two_stage_scratch
 
 
 @inline_kernel
@@ -30,15 +28,13 @@ def predict_reevaluate_step(model, state, scratch, h):
 
 @kernel
 def advance(model, x, v, h, steps):
-    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
-    return drive(predict_reevaluate_step, model, (x, v), scratch, h, steps)
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    scratch = (np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x))
-    return drive(predict_reevaluate_step, model, (x, v), scratch, h, steps)
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @register

@@ -1,10 +1,8 @@
 """Symplectic (semi-implicit) Euler: v' = v + h a(x, v), then x' = x + h v'. First order."""
-import numpy as np
-
 from .._jit import inline_kernel, kernel, parallel_kernel
-from ..forces import accelerations, force_columns
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, drive
+from ._steps import add_scaled, drive, one_stage_scratch
 
 
 @inline_kernel
@@ -18,15 +16,13 @@ def symplectic_euler_step(model, state, scratch, h):
 
 @kernel
 def advance(model, x, v, h, steps):
-    return drive(symplectic_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
-                 steps)
+    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(symplectic_euler_step, model, (x, v), (np.empty_like(x), force_columns(x)), h,
-                 steps)
+    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
 
 
 @register
