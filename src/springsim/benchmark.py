@@ -15,8 +15,10 @@ DEFAULT_SECONDS = 3.0
 CALL_SECONDS = 0.1  # with --seconds, each timed call runs about this long
 
 
-def benchmark(scene, steps: int | None = None, seconds: float | None = None) -> dict:
-    """Time ``steps`` steps in one compiled call, or whole calls for about ``seconds`` s."""
+def benchmark(scene, steps: int | None = None, seconds: float | None = None,
+              threads: int | None = None) -> dict:
+    """Time ``steps`` steps in one compiled call, or whole calls for about ``seconds`` s, with
+    at most ``threads`` threads (default: all cores)."""
     if steps is None and seconds is None:
         seconds = DEFAULT_SECONDS
     if steps is not None:
@@ -25,7 +27,7 @@ def benchmark(scene, steps: int | None = None, seconds: float | None = None) -> 
         require(math.isfinite(seconds) and seconds > 0, "seconds", seconds, "must be > 0 s")
 
     started = time.perf_counter()
-    simulation = Simulation(scene)
+    simulation = Simulation(scene, threads=threads)
     build_seconds = time.perf_counter() - started
     started = time.perf_counter()
     simulation.step(1)  # compiles the kernels, or loads them from the cache
@@ -39,6 +41,7 @@ def benchmark(scene, steps: int | None = None, seconds: float | None = None) -> 
         "scene": scene.name,
         "integrator": simulation.integrator.name,
         "dt": simulation.dt,
+        "threads": simulation.threads,
         "particles": simulation.model.particle_count,
         "springs": simulation.model.spring_count(),
         "steps": timed_steps,

@@ -7,8 +7,9 @@ For a spring (a, b) with d = x_a - x_b, l = d / |d| and rest length r:
 (springs.spring_force_factor), plus gravity m g and viscous drag -c v on every particle.
 """
 import numpy as np
+from numba import prange
 
-from ._jit import kernel
+from ._jit import inline_kernel, kernel
 from .contact import apply_contact_forces
 from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
 from .springs import spring_force_factor
@@ -20,7 +21,7 @@ def force_columns(x):
     return np.empty((COLUMNS, x.shape[0]))
 
 
-@kernel
+@inline_kernel
 def spring_forces(model, x, v, columns, out):
     """out = the spring and damper force on every particle (N).
 
@@ -51,7 +52,7 @@ def add_loose_spring_forces(model, x, v, force):
         force[b, 2] -= fz
 
 
-@kernel
+@inline_kernel
 def accelerations(model, x, v, h, out, columns):
     """out = dv/dt at (x, v): internal and external forces over mass, then terrain contact.
 
@@ -63,12 +64,12 @@ def accelerations(model, x, v, h, out, columns):
     apply_contact_forces(model, x, v, h, out)
 
 
-@kernel
+@inline_kernel
 def free_accelerations(model, x, v, out, columns):
     """out = dv/dt at (x, v) before terrain contact: springs, dampers, drag and gravity."""
     spring_forces(model, x, v, columns, out)
     inv_mass, gravity, drag = model.inv_mass, model.gravity, model.drag
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         w = inv_mass[i]
         for c in range(3):
             out[i, c] = w * (out[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)

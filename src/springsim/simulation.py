@@ -12,7 +12,7 @@ import numpy as np
 
 from .energy import energies
 from .errors import SceneError, SimulationDiverged, require
-from .integrators import get_integrator
+from .integrators import available_threads, get_integrator
 from .model import build_model
 from .scene import Scene, check_bodies_outside_terrains
 from .state import State
@@ -33,22 +33,35 @@ def integrator_settings(scene, overrides: dict) -> dict:
     return {**settings, **overrides}
 
 
+def check_threads(threads) -> int:
+    """threads, or all cores for None; one clear error for anything else."""
+    cores = available_threads()
+    if threads is None:
+        return cores
+    require(isinstance(threads, (int, np.integer)) and not isinstance(threads, bool)
+            and 1 <= threads <= cores, "threads", threads,
+            f"must be a whole number from 1 to {cores} (this machine's cores)")
+    return int(threads)
+
+
 class Simulation:
     """Simulate ``scene`` with ``integrator`` (a registered name) and time step ``dt`` (s).
 
     Both default to the scene's own. ``integrator_options`` go to the integrator and win over the
     scene's ``implicit`` settings (for example ``newton_iterations=2`` for implicit_euler).
     The simulation works on its own copy of ``scene`` (``self.scene``): the caller's is never
-    changed.
+    changed. ``threads`` is the most threads a step may use (default: all cores); results are
+    the same for any number.
     """
 
     def __init__(self, scene, integrator: str | None = None, dt: float | None = None,
-                 **integrator_options):
+                 threads: int | None = None, **integrator_options):
         if isinstance(scene, (str, bytes)) or hasattr(scene, "__fspath__"):
             raise SceneError("scene", str(scene), "is a name or a file, not a Scene: load it "
                              f"first, Simulation(springsim.load_scene({str(scene)!r}))")
         require(isinstance(scene, Scene), "scene", type(scene).__name__,
                 "must be a springsim Scene (springsim.load_scene gives one)")
+        self.threads = check_threads(threads)
         scene = copy.deepcopy(scene)
         if integrator is not None:
             scene.integrator = integrator
@@ -93,7 +106,8 @@ class Simulation:
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
         self.state.check(self.model.particle_count)
-        done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count))
+        done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
+                                                 self.threads)
         self.state.time += done * self.dt
         self.state.steps += done
         if particle >= 0:

@@ -28,7 +28,8 @@ def run(args) -> int:
             f"must be a whole number of steps from 1 to {MAX_STEPS:,}")
     require(args.seconds is None or (is_finite(args.seconds) and 0 < args.seconds <= MAX_SECONDS),
             "seconds", args.seconds, f"must be > 0 s and at most {MAX_SECONDS:g} s")
-    result = benchmark(scene_from_arguments(args), steps=args.steps, seconds=args.seconds)
+    result = benchmark(scene_from_arguments(args), steps=args.steps, seconds=args.seconds,
+                       threads=args.threads)
     print(json.dumps(result) if args.json else "\n".join(report_lines(result)))
     return 0
 
@@ -45,7 +46,8 @@ def report_lines(result: dict) -> list[str]:
         ("peak memory", "unknown" if memory is None else f"{memory:.0f} MB"),
     ]
     heading = (f"{result['scene']}: {result['integrator']}, dt = {result['dt']:g} s, "
-               f"{result['particles']} particles, {result['springs']} springs")
+               f"{result['particles']} particles, {result['springs']} springs, "
+               f"{result['threads']} thread(s) allowed")
     return [heading] + [f"  {label:<18}{text}" for label, text in rows]
 
 

@@ -46,7 +46,7 @@ def run(args) -> int:
     check_output(args.out, args.width, args.height, args.fps, key="--out")
     scene = scene_from_arguments(args)
     plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
-    sim = Simulation(scene)
+    sim = Simulation(scene, threads=args.threads)
     times, positions = simulate_frames(sim, sim.scene.duration, args.fps,
                                        progress=not args.quiet)
     try:

@@ -43,6 +43,9 @@ def add_scene_arguments(parser, scene_optional: bool = False) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change one key of the scene, e.g. bodies.0.particles_per_edge=7 "
                              "(repeatable; see docs/scene-files.md)")
+    parser.add_argument("--threads", type=int, metavar="N",
+                        help="most threads a step may use (default: all cores; the results are "
+                             "the same for any number)")
 
 
 def scene_from_arguments(args):
@@ -91,7 +94,7 @@ def run(args) -> int:
                           folder=output_format(args.video, key="--video") == "png folder")
     plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
 
-    simulation = Simulation(scene)
+    simulation = Simulation(scene, threads=args.threads)
     recording = record_run(simulation, args, out, resumed)   # record, with checkpoints
     write_npz(out, recording.arrays())
     written = [out]

@@ -11,6 +11,9 @@ def add_arguments(parser) -> None:
                         help="a built-in scene or a .toml file (default: jelly-plane)")
     parser.add_argument("--integrator", help="integrator name (default: the scene's)")
     parser.add_argument("--dt", type=float, metavar="SECONDS", help="time step in s")
+    parser.add_argument("--threads", type=int, metavar="N",
+                        help="most threads a step may use (default: all cores; the results are "
+                             "the same for any number)")
     parser.add_argument("--width", type=int, default=1280, help="window width in pixels")
     parser.add_argument("--height", type=int, default=800, help="window height in pixels")
     parser.add_argument("--start", action="store_true", help="start simulating at once")
@@ -34,7 +37,8 @@ def run(args) -> int:
     if args.screenshot:
         check_output_path("--screenshot", args.screenshot)
     require(args.frames is None or args.frames >= 0, "--frames", args.frames, "must be >= 0")
-    controls = Controls(args.scene, integrator=args.integrator, dt=args.dt)
+    controls = Controls(args.scene, integrator=args.integrator, dt=args.dt,
+                        threads=args.threads)
     try:
         from ..viewer.window import Viewer
 

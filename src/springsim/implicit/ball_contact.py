@@ -27,7 +27,7 @@ contact is active adds
 The geometric part of the spring's stiffness (across n) is dropped, as for compressed springs
 (jacobian.py): it would make the matrix indefinite. Since the block pattern is fixed when the
 model is built, none of this is assembled: ``add_contact_product`` adds it to every matrix-vector
-product of the solve (cg.py) and ``add_contact_diagonal`` to the Jacobi preconditioner.
+product of the solve (cg.py) and ``add_contact_blocks`` to the block-Jacobi preconditioner.
 
 Which contacts are active is an active set, updated between solves together with the terrain
 contacts (implicit_euler.solve_with_contacts): a pair starts active if g < 0; after a solve an
@@ -194,17 +194,19 @@ def add_contact_product(contacts, u, out):
 
 
 @kernel
-def add_contact_diagonal(contacts, diagonal):
-    """diagonal += the diagonal entries of A_c: h^2 k n_c^2 on both particles of active pairs."""
+def add_contact_blocks(contacts, diagonal):
+    """diagonal[i] += the diagonal blocks of A_c: h^2 k n n^T on both particles of active
+    pairs."""
     pairs, normal, gap, coefficient, active = contacts
     for p in range(pairs.shape[0]):
         if not active[p]:
             continue
         a, b = pairs[p, 0], pairs[p, 1]
-        for c in range(3):
-            value = coefficient[p] * normal[p, c] * normal[p, c]
-            diagonal[a, c] += value
-            diagonal[b, c] += value
+        for r in range(3):
+            for c in range(3):
+                value = coefficient[p] * normal[p, r] * normal[p, c]
+                diagonal[a, r, c] += value
+                diagonal[b, r, c] += value
 
 
 # How many linearized solves a step takes per radius a ball moves against a point it may touch.

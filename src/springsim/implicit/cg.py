@@ -1,4 +1,8 @@
-"""Filtered, Jacobi-preconditioned conjugate gradients (Baraff and Witkin 1998, section 5.3).
+"""Filtered, block-Jacobi-preconditioned conjugate gradients (Baraff and Witkin 1998, section 5.3).
+
+The preconditioner is the inverse of each particle's 3 x 3 diagonal block (Baraff and Witkin
+take its diagonal entries alone): it undoes the coupling of a particle's three components by the
+springs it holds, which the plain diagonal leaves to the iterations.
 
 Solves A u = b for the components of u that no constraint fixes: every search direction is
 filtered (``constraints.filter_constrained``), so the constrained components keep their starting
@@ -32,9 +36,10 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from .ball_contact import add_contact_diagonal, add_contact_product, no_ball_contacts
-from .constraints import filter_constrained
+from .ball_contact import add_contact_blocks, add_contact_product, no_ball_contacts
+from .constraints import filter_constrained, filtered
 from .jacobian import block_multiply
+from .spring_terms import add_spring_products, no_spring_terms, spring_terms_trace
 
 # N s: a reference below this is zero (nothing to solve); its square would underflow the goal
 MIN_REFERENCE = 1e-150
@@ -49,51 +54,64 @@ def dot(u, w):
 
 
 @kernel
-def system_multiply(pattern, blocks, contacts, u, out):
-    """out = A u: the assembled blocks and the active ball-particle contacts."""
+def system_multiply(pattern, blocks, terms, contacts, u, out):
+    """out = A u: the stored blocks, the springs' terms that are not stored (spring_terms.py)
+    and the active ball-particle contacts."""
     block_multiply(pattern, blocks, u, out)
+    add_spring_products(terms, u, out)
     add_contact_product(contacts, u, out)
 
 
 @kernel
-def system_diagonal(pattern, blocks, contacts, diagonal):
-    """diagonal = the diagonal entries of A (blocks and contacts), shaped like u."""
-    for i in range(diagonal.shape[0]):
-        slot = pattern.diagonal_slot[i]
-        for c in range(3):
-            diagonal[i, c] = blocks[slot, c, c]
-    add_contact_diagonal(contacts, diagonal)
+def inverse_diagonal_blocks(pattern, blocks, contacts, count):
+    """The inverse of every diagonal block of A (stored blocks and contacts), (count, 3, 3):
+    each block is symmetric positive definite, inverted by cofactors (exactly symmetric)."""
+    m = np.empty((count, 3, 3))
+    for i in range(count):
+        m[i] = blocks[pattern.diagonal_slot[i]]
+    add_contact_blocks(contacts, m)
+    for i in range(count):
+        a, b, c, d, e, f = m[i, 0, 0], m[i, 0, 1], m[i, 0, 2], m[i, 1, 1], m[i, 1, 2], m[i, 2, 2]
+        c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
+        c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
+        scale = 1.0 / (a * c00 + b * c01 + c * c02)
+        m[i, 0, 0], m[i, 1, 1], m[i, 2, 2] = scale * c00, scale * c11, scale * c22
+        m[i, 0, 1] = m[i, 1, 0] = scale * c01
+        m[i, 0, 2] = m[i, 2, 0] = scale * c02
+        m[i, 1, 2] = m[i, 2, 1] = scale * c12
+    return m
 
 
 @kernel
-def precondition(diagonal, r, out):
-    """out = r / diag(A), entry by entry (Jacobi)."""
+def precondition(inverse, r, out):
+    """out = the inverse diagonal blocks times r (block Jacobi)."""
     for i in range(r.shape[0]):
+        r0, r1, r2 = r[i, 0], r[i, 1], r[i, 2]
         for c in range(3):
-            out[i, c] = r[i, c] / diagonal[i, c]
+            out[i, c] = inverse[i, c, 0] * r0 + inverse[i, c, 1] * r1 + inverse[i, c, 2] * r2
 
 
 @kernel
 def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, reference_norm,
                 r, s, c, q):
     """``contact_cg`` for the assembled matrix alone (no ball-particle contacts)."""
-    return contact_cg(pattern, blocks, no_ball_contacts(), b, kind, normal, u, tolerance,
-                      max_iterations, reference_norm, r, s, c, q)
+    return contact_cg(pattern, blocks, no_spring_terms(), no_ball_contacts(), b, kind, normal, u,
+                      tolerance, max_iterations, reference_norm, r, s, c, q)
 
 
 @kernel
-def contact_cg(pattern, blocks, contacts, b, kind, normal, u, tolerance, max_iterations,
+def contact_cg(pattern, blocks, terms, contacts, b, kind, normal, u, tolerance, max_iterations,
                reference_norm, r, s, c, q):
     """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass), A the
-    assembled blocks plus the active ``contacts`` (ball_contact.py).
+    stored blocks plus the springs' ``terms`` (spring_terms.py) and the active ``contacts``
+    (ball_contact.py).
 
     The reference is ``reference_norm`` if positive, else the larger of the starting residual
     |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. r, s, c, q are work arrays
     shaped like u. Returns (iterations, reference norm used).
     """
-    diagonal = np.empty_like(u)
-    system_diagonal(pattern, blocks, contacts, diagonal)
-    system_multiply(pattern, blocks, contacts, u, q)
+    inverse = inverse_diagonal_blocks(pattern, blocks, contacts, u.shape[0])
+    system_multiply(pattern, blocks, terms, contacts, u, q)
     for i in range(u.shape[0]):
         for k in range(3):
             r[i, k] = b[i, k] - q[i, k]
@@ -103,48 +121,101 @@ def contact_cg(pattern, blocks, contacts, b, kind, normal, u, tolerance, max_ite
     if not reference > 0.0:
         reference = max(math.sqrt(residual_squared), math.sqrt(dot(b, b)), MIN_REFERENCE)
     goal = (tolerance * reference) ** 2
-    precondition(diagonal, r, s)
+    precondition(inverse, r, s)
     filter_constrained(kind, normal, s)
     c[:] = s
     delta = dot(r, s)
     for iteration in range(max_iterations):
         if not residual_squared > goal:   # also stops on NaN, which the divergence check reports
             return iteration, reference
-        system_multiply(pattern, blocks, contacts, c, q)
-        filter_constrained(kind, normal, q)
-        curvature = dot(c, q)
+        system_multiply(pattern, blocks, terms, contacts, c, q)
+        curvature = filter_and_dot(kind, normal, q, c)
         if not curvature > 0.0:
             return iteration, reference
-        alpha = delta / curvature
-        for i in range(u.shape[0]):
-            for k in range(3):
-                u[i, k] += alpha * c[i, k]
-                r[i, k] -= alpha * q[i, k]
-        filter_constrained(kind, normal, r)   # q's rounding, kept out of the residual
-        precondition(diagonal, r, s)
-        filter_constrained(kind, normal, s)
-        delta_new = dot(r, s)
+        delta_new, residual_squared = cg_update(kind, normal, inverse, delta / curvature, c, q,
+                                                u, r, s)
         beta = delta_new / delta
         delta = delta_new
         for i in range(u.shape[0]):
             for k in range(3):
                 c[i, k] = s[i, k] + beta * c[i, k]
-        residual_squared = dot(r, r)
     return max_iterations, reference
 
 
 @kernel
-def conserve_momentum(pattern, blocks, contacts, b, kind, u, q):
+def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, u, r, s, q):
+    """u += alpha S M^-1 r, r = S (b - A u), with the alpha that lowers the error's A-norm most
+    (none if that direction has no curvature). r, s, q are work arrays.
+
+    Why: the block-Jacobi preconditioner divides by the springs' stiffness too, so a smooth load
+    (gravity on a falling body: every particle's velocity changes by h g) takes conjugate
+    gradients as many iterations as the load takes to cross the body, one neighbour per
+    iteration. M^-1 r is the velocity change the load gives when the springs do not resist it,
+    exact for a uniform one: a falling 30^3 cube's solve needs 2 iterations after it instead of
+    27 (benchmarks/implicit_scale.py). A step along it is never worse than none."""
+    system_multiply(pattern, blocks, terms, contacts, u, q)
+    for i in range(u.shape[0]):
+        for k in range(3):
+            r[i, k] = b[i, k] - q[i, k]
+            s[i, k] = inverse_mass[i] * r[i, k]
+    filter_constrained(kind, normal, r)
+    filter_constrained(kind, normal, s)
+    system_multiply(pattern, blocks, terms, contacts, s, q)
+    curvature = dot(s, q)
+    if curvature > 0.0:
+        alpha = dot(s, r) / curvature
+        for i in range(u.shape[0]):
+            for k in range(3):
+                u[i, k] += alpha * s[i, k]
+
+
+@kernel
+def filter_and_dot(kind, normal, q, c):
+    """q = S q; returns c . q."""
+    total = 0.0
+    for i in range(q.shape[0]):
+        q0, q1, q2 = filtered(kind[i], normal[i, 0], normal[i, 1], normal[i, 2], q[i, 0],
+                              q[i, 1], q[i, 2])
+        q[i, 0], q[i, 1], q[i, 2] = q0, q1, q2
+        total += c[i, 0] * q0 + c[i, 1] * q1 + c[i, 2] * q2
+    return total
+
+
+@kernel
+def cg_update(kind, normal, inverse, alpha, c, q, u, r, s):
+    """One pass for the rest of an iteration: u += alpha c, r -= alpha q, filtered again (q's
+    rounding, kept out of the residual), s = S P r (P the preconditioner). Returns (r . s, r . r).
+    """
+    delta = residual_squared = 0.0
+    for i in range(u.shape[0]):
+        n0, n1, n2 = normal[i, 0], normal[i, 1], normal[i, 2]
+        for k in range(3):
+            u[i, k] += alpha * c[i, k]
+        r0, r1, r2 = filtered(kind[i], n0, n1, n2, r[i, 0] - alpha * q[i, 0],
+                              r[i, 1] - alpha * q[i, 1], r[i, 2] - alpha * q[i, 2])
+        r[i, 0], r[i, 1], r[i, 2] = r0, r1, r2
+        s0, s1, s2 = filtered(kind[i], n0, n1, n2,
+                              inverse[i, 0, 0] * r0 + inverse[i, 0, 1] * r1 + inverse[i, 0, 2] * r2,
+                              inverse[i, 1, 0] * r0 + inverse[i, 1, 1] * r1 + inverse[i, 1, 2] * r2,
+                              inverse[i, 2, 0] * r0 + inverse[i, 2, 1] * r1 + inverse[i, 2, 2] * r2)
+        s[i, 0], s[i, 1], s[i, 2] = s0, s1, s2
+        delta += r0 * s0 + r1 * s1 + r2 * s2
+        residual_squared += r0 * r0 + r1 * r1 + r2 * r2
+    return delta, residual_squared
+
+
+@kernel
+def conserve_momentum(pattern, blocks, terms, contacts, b, kind, u, q):
     """If no particle is constrained, shift u by the uniform velocity change that leaves the
     residual b - A u summing to zero in each direction (module doc); q is a work array."""
     for i in range(kind.shape[0]):
         if kind[i] != 0:   # constraints.FREE
             return
-    system_multiply(pattern, blocks, contacts, u, q)
+    system_multiply(pattern, blocks, terms, contacts, u, q)
     for c in range(3):
         # T^T A T: springs and contacts cancel between their two particles, leaving the masses
         # and drag; its off-diagonal entries are rounding and are left out
-        translated = 0.0
+        translated = -2.0 * spring_terms_trace(terms, c)   # their (a, b) and (b, a) blocks
         for slot in range(blocks.shape[0]):
             translated += blocks[slot, c, c]
         residual = 0.0

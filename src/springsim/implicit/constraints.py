@@ -142,14 +142,21 @@ def hold_all_constrained(kind, normal, normal_floor, v, dv, ddv):
 def filter_constrained(kind, normal, u):
     """u = S u: remove the normal component of contacts and everything of pinned particles."""
     for i in range(u.shape[0]):
-        if kind[i] == FREE:
-            continue
-        if kind[i] == PINNED:
-            u[i, 0] = u[i, 1] = u[i, 2] = 0.0
-            continue
-        u_n = u[i, 0] * normal[i, 0] + u[i, 1] * normal[i, 1] + u[i, 2] * normal[i, 2]
-        for c in range(3):
-            u[i, c] -= u_n * normal[i, c]
+        u[i, 0], u[i, 1], u[i, 2] = filtered(kind[i], normal[i, 0], normal[i, 1], normal[i, 2],
+                                             u[i, 0], u[i, 1], u[i, 2])
+
+
+@kernel
+def filtered(kind, n0, n1, n2, u0, u1, u2):
+    """S_i u_i for one particle of the given kind and normal. Scalars in and out: a kernel
+    called per particle with arrays as arguments costs a reference count up and down per array
+    (about 35 ns, a hundred times the work of filtering a free particle)."""
+    if kind == FREE:
+        return u0, u1, u2
+    if kind == PINNED:
+        return 0.0, 0.0, 0.0
+    u_n = u0 * n0 + u1 * n1 + u2 * n2
+    return u0 - u_n * n0, u1 - u_n * n1, u2 - u_n * n2
 
 
 @kernel

@@ -19,7 +19,7 @@ iterations still converge to the exact backward-Euler step (linearly rather than
 """
 import math
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 
 
 @kernel
@@ -37,31 +37,45 @@ def particle_mass(inv_mass):
 
 
 @kernel
+def spring_block(dx, dy, dz, ks, kd, rest_length, damping_scale, stiffness_scale):
+    """The block C = -damping_scale dF_a/dv_a - stiffness_scale dF_a/dx_a = p l l^T + q I of a
+    spring with d = x_a - x_b = (dx, dy, dz), as (p, q, l_x, l_y, l_z); all zero for a spring of
+    zero length (no direction, no force as in forces.py, so no Jacobian). Scalars in and out, so
+    that the compiler inlines it (a kernel called per spring with arrays as arguments costs a
+    reference count up and down per array)."""
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if length == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    along, across = stiffness_along_across(ks, rest_length, length)
+    return (damping_scale * kd + stiffness_scale * along, stiffness_scale * across, dx / length,
+            dy / length, dz / length)
+
+
+@kernel
+def assemble_mass(model, pattern, mass_scale, damping_scale, blocks):
+    """blocks = mass_scale M - damping_scale (dF/dv of the drag): the diagonal, nothing else."""
+    blocks[:] = 0.0
+    for i in range(model.inv_mass.shape[0]):
+        diagonal = mass_scale * particle_mass(model.inv_mass[i]) + damping_scale * model.drag[i]
+        slot = pattern.diagonal_slot[i]
+        for c in range(3):
+            blocks[slot, c, c] = diagonal
+
+
+@kernel
 def assemble_system(model, pattern, x, mass_scale, damping_scale, stiffness_scale, blocks):
     """blocks = mass_scale M - damping_scale dF/dv - stiffness_scale dF/dx, at positions x.
 
     Backward Euler uses (1, h, h^2); (0, 1, 0) gives -dF/dv and (0, 0, 1) gives -dF/dx alone.
     Every spring adds its block C to (a, a) and (b, b) and subtracts it from (a, b) and (b, a).
     """
-    blocks[:] = 0.0
-    for i in range(x.shape[0]):
-        diagonal = mass_scale * particle_mass(model.inv_mass[i]) + damping_scale * model.drag[i]
-        slot = pattern.diagonal_slot[i]
-        for c in range(3):
-            blocks[slot, c, c] = diagonal
+    assemble_mass(model, pattern, mass_scale, damping_scale, blocks)
     springs, rest_length, group = model.springs, model.rest_length, model.spring_group
     for s in range(springs.shape[0]):
-        a, b = springs[s, 0], springs[s, 1]
-        dx, dy, dz = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length == 0.0:
-            continue  # no direction, no force (as in forces.py), so no Jacobian
-        l0, l1, l2 = dx / length, dy / length, dz / length
-        g = group[s]
-        along, across = stiffness_along_across(model.group_ks[g], rest_length[s], length)
-        # C = -damping_scale dF_a/dv_a - stiffness_scale dF_a/dx_a = p l l^T + q I
-        p = damping_scale * model.group_kd[g] + stiffness_scale * along
-        q = stiffness_scale * across
+        a, b, g = springs[s, 0], springs[s, 1], group[s]
+        p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2],
+                                        model.group_ks[g], model.group_kd[g], rest_length[s],
+                                        damping_scale, stiffness_scale)
         aa, bb, ab, ba = (pattern.spring_slots[s, 0], pattern.spring_slots[s, 1],
                           pattern.spring_slots[s, 2], pattern.spring_slots[s, 3])
         l = (l0, l1, l2)
@@ -77,6 +91,71 @@ def assemble_system(model, pattern, x, mass_scale, damping_scale, stiffness_scal
                     blocks[bb, c, r] += value
                     blocks[ab, c, r] -= value
                     blocks[ba, c, r] -= value
+
+
+@kernel
+def assemble_diagonal_and_terms(model, pattern, x, mass_scale, damping_scale, stiffness_scale,
+                                blocks, terms):
+    """The matrix of assemble_system, as its diagonal blocks (``pattern`` a
+    ``diagonal_pattern``) and the springs' coefficients in ``terms`` (spring_terms.py), holes
+    of the runs zero."""
+    assemble_mass(model, pattern, mass_scale, damping_scale, blocks)
+    runs, run_coefficients, loose_pairs, loose_coefficients, columns = terms
+    run_coefficients[:] = 0.0
+    for r in range(runs.shape[0]):
+        first, offset, count, start, g = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
+        ks, kd = model.group_ks[g], model.group_kd[g]
+        for i in range(count):
+            rest = model.run_rest_length[start + i]
+            if rest < 0.0:
+                continue   # a hole
+            a, b = first + i, first + i + offset
+            p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1],
+                                            x[a, 2] - x[b, 2], ks, kd, rest, damping_scale,
+                                            stiffness_scale)
+            run_coefficients[0, start + i], run_coefficients[1, start + i] = p, q
+            run_coefficients[2, start + i], run_coefficients[3, start + i] = l0, l1
+            run_coefficients[4, start + i] = l2
+    for k in range(loose_pairs.shape[0]):
+        s = model.loose_springs[k]
+        a, b, g = loose_pairs[k, 0], loose_pairs[k, 1], model.spring_group[s]
+        p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2],
+                                        model.group_ks[g], model.group_kd[g],
+                                        model.rest_length[s], damping_scale, stiffness_scale)
+        loose_coefficients[0, k], loose_coefficients[1, k] = p, q
+        loose_coefficients[2, k], loose_coefficients[3, k], loose_coefficients[4, k] = l0, l1, l2
+    add_terms_to_diagonal(pattern, terms, blocks)
+
+
+@kernel
+def add_terms_to_diagonal(pattern, terms, blocks):
+    """Every spring's block C to the diagonal blocks of both its particles."""
+    runs, run_coefficients, loose_pairs, loose_coefficients, columns = terms
+    for r in range(runs.shape[0]):
+        first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+        for i in range(count):
+            for end in (first + i, first + i + offset):
+                slot = pattern.diagonal_slot[end]
+                k = start + i
+                p, q = run_coefficients[0, k], run_coefficients[1, k]
+                l = (run_coefficients[2, k], run_coefficients[3, k], run_coefficients[4, k])
+                add_block(blocks, slot, p, q, l)
+    for k in range(loose_pairs.shape[0]):
+        for end in (loose_pairs[k, 0], loose_pairs[k, 1]):
+            p, q = loose_coefficients[0, k], loose_coefficients[1, k]
+            l = (loose_coefficients[2, k], loose_coefficients[3, k], loose_coefficients[4, k])
+            add_block(blocks, pattern.diagonal_slot[end], p, q, l)
+
+
+@inline_kernel
+def add_block(blocks, slot, p, q, l):
+    """blocks[slot] += p l l^T + q I, each value computed once: exactly symmetric."""
+    for row in range(3):
+        for c in range(row, 3):
+            value = p * l[row] * l[c] + (q if row == c else 0.0)
+            blocks[slot, row, c] += value
+            if c != row:
+                blocks[slot, c, row] += value
 
 
 @kernel

@@ -1,5 +1,9 @@
 """The block sparsity pattern of the backward-Euler matrix, fixed when the model is built.
 
+(The integrator stores only the diagonal blocks, ``diagonal_pattern``, and applies the springs'
+blocks from their coefficients: ``SolveLayout`` and spring_terms.py. The full pattern is the
+reference the tests compare it with.)
+
 The matrix has one 3 x 3 block per particle pair that a spring joins (both orders) and one on the
 diagonal per particle. The pattern is block compressed sparse rows (BSR): the blocks of row i are
 ``row_start[i]:row_start[i + 1]``, ``column`` gives their block columns in increasing order. Each
@@ -39,3 +43,28 @@ def build_block_pattern(arrays) -> BlockPattern:
     spring_slots = np.stack([slot(a, a), slot(b, b), slot(a, b), slot(b, a)], axis=1)
     return BlockPattern(row_start=row_start, column=column.astype(np.int64),
                         diagonal_slot=slot(diagonal, diagonal), spring_slots=spring_slots)
+
+
+def diagonal_pattern(count: int) -> BlockPattern:
+    """The pattern of the diagonal blocks alone, for a matrix whose springs' blocks are not
+    stored (spring_terms.py)."""
+    diagonal = np.arange(count, dtype=np.int64)
+    return BlockPattern(row_start=np.arange(count + 1, dtype=np.int64), column=diagonal,
+                        diagonal_slot=diagonal, spring_slots=np.empty((0, 4), np.int64))
+
+
+class SolveLayout(NamedTuple):
+    """What implicit_euler's solve needs of a model, built once: the pattern of the stored
+    (diagonal) blocks, and the springs' layout for their terms (spring_terms.py)."""
+    diagonal: BlockPattern
+    runs: np.ndarray          # (R, 5) the model's spring runs (spring_runs.py)
+    run_entries: int          # places in the runs, holes included
+    loose_pairs: np.ndarray   # (L, 2) int64 the particles of each loose spring
+
+
+def build_solve_layout(arrays) -> SolveLayout:
+    return SolveLayout(diagonal=diagonal_pattern(len(arrays.inv_mass)),
+                       runs=arrays.spring_runs.astype(np.int64),
+                       run_entries=len(arrays.run_rest_length),
+                       loose_pairs=arrays.springs[arrays.loose_springs].astype(np.int64)
+                       .reshape(-1, 2))

@@ -3,7 +3,10 @@
 Adding one is one new file in this package that defines an ``Integrator`` subclass decorated with
 ``@register``, plus its import line at the bottom of this file.
 """
+import numba
+
 from ..errors import SceneError
+from ..spring_runs import partition_count
 
 REGISTRY: dict[str, type] = {}
 
@@ -11,8 +14,9 @@ REGISTRY: dict[str, type] = {}
 class Integrator:
     """Advances a state by whole steps of size dt; subclasses set ``name``, ``order``, ``summary``.
 
-    ``advance(model, state, dt, steps)`` returns ``(steps_done, particle)`` where ``particle`` is
-    the first particle found diverging after step ``steps_done`` (and -1 if none did).
+    ``advance(model, state, dt, steps, threads)`` returns ``(steps_done, particle)`` where
+    ``particle`` is the first particle found diverging after step ``steps_done`` (and -1 if none
+    did). ``threads`` is the most threads it may use.
     """
 
     name = ""
@@ -25,20 +29,37 @@ class Integrator:
             raise SceneError(f"integrator option {key}", options[key],
                              f"'{self.name}' takes no options")
 
-    def advance(self, model, state, dt: float, steps: int) -> tuple[int, int]:
+    def advance(self, model, state, dt: float, steps: int, threads: int = 1) -> tuple[int, int]:
         raise NotImplementedError  # every registered integrator overrides this
 
 
 class KernelIntegrator(Integrator):
     """An integrator whose whole loop of steps is one compiled kernel
-    ``kernel(model_arrays, x, v, dt, steps) -> (steps_done, particle)``."""
+    ``kernel(model_arrays, x, v, dt, steps) -> (steps_done, particle)``, and the same compiled
+    with its loops on threads, ``parallel_kernel``.
+
+    Which one runs depends on the model's size alone (spring_runs.partition_count): a model
+    whose force loop has one partition (under 131,072 particles) runs serially, since starting
+    threads for every loop costs more than it saves there; a larger one runs the threaded kernel
+    with ``threads`` threads, one thread included, so that its results do not depend on the
+    number of threads (spring_runs.py: bit-identical for any count)."""
 
     kernel = None
+    parallel_kernel = None
 
-    def advance(self, model, state, dt, steps):
-        done, particle = self.kernel(model.arrays, state.positions, state.velocities,
-                                           float(dt), int(steps))
+    def advance(self, model, state, dt, steps, threads=1):
+        kernel = self.kernel
+        if partition_count(model.particle_count) > 1:
+            numba.set_num_threads(threads)
+            kernel = self.parallel_kernel
+        done, particle = kernel(model.arrays, state.positions, state.velocities, float(dt),
+                                int(steps))
         return int(done), int(particle)
+
+
+def available_threads() -> int:
+    """The most threads a simulation can use: the machine's cores (or NUMBA_NUM_THREADS)."""
+    return numba.config.NUMBA_NUM_THREADS
 
 
 def register(cls):

@@ -1,17 +1,60 @@
-"""Small kernels the integrators share."""
-import numpy as np
+"""What every integrator shares: the one driver loop, and the small kernels of a step.
 
-from .._jit import kernel
+Each method is a step function ``step(model, state, scratch, h)`` that advances ``state`` (a tuple
+whose first two entries are the positions x and velocities v, changed in place) by one step h,
+using the work arrays in ``scratch``. ``drive`` takes whole steps with it: step, then everything
+that follows every integrator's update (``finish_step``: impacts, collisions, the divergence
+check). Each integrator file binds its step in a two-line cached kernel,
+``advance = drive(its_step, model, state, its_scratch(x), h, steps)``.
+
+Why ``drive`` is inlined rather than a kernel that takes the step as an argument: Numba types a
+function passed as an argument by the identity of its dispatcher object, which is new in every
+process, so a cached kernel with a function argument never finds its cache (it recompiles in
+3 to 4 s every run); and a kernel that calls it with a fixed function is refused caching ("uses
+dynamic globals"). Inlined into each method's own ``advance``, the step function is a constant of
+that kernel, which caches as any other (benchmarks/driver_cache.py checks it).
+"""
+import numpy as np
+from numba import prange
+
+from .._jit import inline_kernel, kernel
 from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
+from ..forces import force_columns
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
 
+@inline_kernel
+def drive(step, model, state, scratch, h, steps):
+    """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1)."""
+    x, v = state[0], state[1]
+    for done in range(steps):
+        step(model, state, scratch, h)
+        particle = finish_step(model, x, v)
+        if particle >= 0:
+            return done + 1, particle
+    return steps, -1
+
+
 @kernel
+def one_stage_scratch(x):
+    """The scratch of a method with one force evaluation: the accelerations and the force
+    columns."""
+    return np.empty_like(x), force_columns(x)
+
+
+@kernel
+def two_stage_scratch(x):
+    """The scratch of a method with two: the accelerations, the stage's positions and
+    velocities, and the force columns."""
+    return np.empty_like(x), np.empty_like(x), np.empty_like(x), force_columns(x)
+
+
+@inline_kernel
 def add_scaled(out, x, alpha, y):
     """out = x + alpha * y, elementwise, with no temporary array."""
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         for c in range(3):
             out[i, c] = x[i, c] + alpha * y[i, c]
 

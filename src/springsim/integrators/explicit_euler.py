@@ -1,14 +1,14 @@
 """Explicit (forward) Euler: x' = x + h v, v' = v + h a(x, v). First order."""
-import numpy as np
-
-from .._jit import kernel
-from ..forces import accelerations, force_columns
+from .._jit import inline_kernel, kernel, parallel_kernel
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive, one_stage_scratch
 
 
-@kernel
-def explicit_euler_step(model, x, v, h, a, columns):
+@inline_kernel
+def explicit_euler_step(model, state, scratch, h):
+    x, v = state
+    a, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x, x, h, v)
     add_scaled(v, v, h, a)
@@ -16,14 +16,13 @@ def explicit_euler_step(model, x, v, h, a, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a = np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        explicit_euler_step(model, x, v, h, a, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
+
+
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
 
 
 @register
@@ -32,3 +31,4 @@ class ExplicitEuler(KernelIntegrator):
     order = 1
     summary = "forward Euler: positions and velocities from the start-of-step state"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

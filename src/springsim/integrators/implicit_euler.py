@@ -31,13 +31,14 @@ from ..errors import require, SceneError
 from ..forces import force_columns, spring_forces
 from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
                                      newton_iterations_needed, update_ball_contacts)
-from ..implicit.cg import conserve_momentum, contact_cg, system_multiply
+from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     restore_impact_speeds, set_friction_damping, update_contacts)
-from ..implicit.jacobian import add_stiffness_product, assemble_system, particle_mass
-from ..implicit.pattern import build_block_pattern
+from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
+from ..implicit.pattern import build_solve_layout
+from ..implicit.spring_terms import spring_terms_like
 from . import Integrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
 
@@ -57,19 +58,20 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
 
 
 @kernel
-def solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h, kind, normal, terrain,
+def solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v, dv, h, kind, normal, terrain,
                         normal_floor, friction_damping, ddv, tolerance, max_iterations,
                         reaction, r, s, c, q):
     """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
     ball-particle contacts (implicit.ball_contact) between solves. Returns the
     conjugate-gradient iterations taken and the number of solves."""
-    iterations, reference = contact_cg(pattern, blocks, balls, rhs, kind, normal, ddv, tolerance,
-                                       max_iterations, 0.0, r, s, c, q)
-    conserve_momentum(pattern, blocks, balls, rhs, kind, ddv, q)
+    mass_start(pattern, blocks, terms, balls, rhs, kind, normal, model.inv_mass, ddv, r, s, q)
+    iterations, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
+                                       tolerance, max_iterations, 0.0, r, s, c, q)
+    conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
     for update in range(MAX_CONTACT_UPDATES):
-        system_multiply(pattern, blocks, balls, ddv, q)
+        system_multiply(pattern, blocks, terms, balls, ddv, q)
         add_scaled(reaction, q, -1.0, rhs)
         terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
                                           normal, terrain, normal_floor, friction_damping,
@@ -77,9 +79,9 @@ def solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h, kind, n
         balls_changed = update_ball_contacts(balls, h, ddv, rhs) > 0
         if not (terrain_changed or balls_changed):
             break
-        more, reference = contact_cg(pattern, blocks, balls, rhs, kind, normal, ddv, tolerance,
-                                     max_iterations, reference, r, s, c, q)
-        conserve_momentum(pattern, blocks, balls, rhs, kind, ddv, q)
+        more, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
+                                     tolerance, max_iterations, reference, r, s, c, q)
+        conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
         solves += 1
@@ -87,17 +89,18 @@ def solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h, kind, n
 
 
 @kernel
-def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, max_iterations,
+def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
                         work, kind, terrain, normal_floor, friction_damping, statistics):
     """One step; adds its conjugate-gradient iterations and linear solves to statistics."""
-    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns = work
+    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms = work
+    pattern = layout.diagonal
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
     balls = find_ball_contacts(model, x, v, h)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
     for newton in range(newton_iterations_needed(model, balls, v, h, newton_iterations)):
-        assemble_system(model, pattern, x_k, 1.0, h, h * h, blocks)
+        assemble_diagonal_and_terms(model, pattern, x_k, 1.0, h, h * h, blocks, terms)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
         linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
         ddv[:] = 0.0
@@ -107,8 +110,8 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
             friction_damping[i] = 0.0
             set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
                                  friction_damping)
-        iterations, solves = solve_with_contacts(model, pattern, blocks, balls, rhs, x, v, dv, h,
-                                                 kind, normal, terrain, normal_floor,
+        iterations, solves = solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v,
+                                                 dv, h, kind, normal, terrain, normal_floor,
                                                  friction_damping, ddv, tolerance,
                                                  max_iterations, reaction, r, s, c, q)
         statistics[0] += iterations
@@ -122,33 +125,40 @@ def backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance, m
 
 
 @kernel
-def workspace(pattern, x):
-    """The arrays a step works in: the matrix blocks, twelve vectors shaped like x and the
-    force columns."""
-    blocks = np.empty((pattern.column.shape[0], 3, 3))
+def workspace(layout, x):
+    """The arrays a step works in: the matrix's diagonal blocks, twelve vectors shaped like x,
+    the force columns and the springs' terms of the matrix."""
+    blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
     vectors = [np.zeros_like(x) for _ in range(12)]
     return (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
             vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
-            force_columns(x))
+            force_columns(x), spring_terms_like(layout.runs, layout.run_entries,
+                                                layout.loose_pairs, x))
 
 
 @kernel
-def advance(model, pattern, x, v, h, steps, newton_iterations, tolerance, max_iterations,
+def implicit_euler_step(model, state, scratch, h):
+    """backward_euler_step as the driver calls it: the state carries the contacts
+    (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
+    statistics."""
+    x, v, kind, terrain, normal_floor, friction_damping = state
+    layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
+    backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
+                        work, kind, terrain, normal_floor, friction_damping, statistics)
+
+
+@kernel
+def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_iterations,
             kind, terrain, normal_floor, friction_damping, statistics):
     """Take ``steps`` steps; returns (steps done, first diverged particle or -1).
 
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
     call) to the next; statistics[0] and [1] count the conjugate-gradient iterations and the
     linear solves."""
-    work = workspace(pattern, x)
-    for step in range(steps):
-        backward_euler_step(model, pattern, x, v, h, newton_iterations, tolerance,
-                            max_iterations, work, kind, terrain, normal_floor, friction_damping,
-                            statistics)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x),
+               statistics)
+    return drive(implicit_euler_step, model, (x, v, kind, terrain, normal_floor,
+                                              friction_damping), scratch, h, steps)
 
 
 @register
@@ -180,14 +190,15 @@ class ImplicitEuler(Integrator):
         self._model = self._pattern = None
 
     def pattern(self, model):
-        """The model's block sparsity pattern, built on first use and kept for as long as the
-        model (a Simulation keeps one model)."""
+        """What the solve needs of the model (pattern.SolveLayout), built on first use and kept
+        for as long as the model (a Simulation keeps one model)."""
         if self._model is not model:
             self._model = model
-            self._pattern = build_block_pattern(model.arrays)
+            self._pattern = build_solve_layout(model.arrays)
         return self._pattern
 
-    def advance(self, model, state, dt, steps):
+    def advance(self, model, state, dt, steps, threads=1):
+        # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
         # the contacts carried between steps live in the state (state.ContactMemory)
         done, particle = advance(model.arrays, self.pattern(model), state.positions,
                                  state.velocities, float(dt), int(steps), self.newton_iterations,

@@ -3,16 +3,16 @@
     x_mid = x + h/2 v,      v_mid = v + h/2 a(x, v)
     x'    = x + h v_mid,    v'    = v + h a(x_mid, v_mid)
 """
-import numpy as np
-
-from .._jit import kernel
-from ..forces import accelerations, force_columns
+from .._jit import inline_kernel, kernel, parallel_kernel
+from ..forces import accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive, two_stage_scratch
 
 
-@kernel
-def midpoint_step(model, x, v, h, a, x_mid, v_mid, columns):
+@inline_kernel
+def midpoint_step(model, state, scratch, h):
+    x, v = state
+    a, x_mid, v_mid, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_mid, x, h / 2, v)
     add_scaled(v_mid, v, h / 2, a)
@@ -23,14 +23,13 @@ def midpoint_step(model, x, v, h, a, x_mid, v_mid, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a, x_mid, v_mid = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        midpoint_step(model, x, v, h, a, x_mid, v_mid, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps)
+
+
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @register
@@ -39,3 +38,4 @@ class Midpoint(KernelIntegrator):
     order = 2
     summary = "explicit midpoint (RK2): derivative at a half-step state"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

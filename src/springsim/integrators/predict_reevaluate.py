@@ -15,17 +15,17 @@ plain ``accelerations(x_p, v_p)`` would) leaves a resting particle's v' = v - v_
 prediction already stopped v_p: a phantom sliding velocity that never decays while x' = x + h v_p
 stays put (up to 28 mm/s on the jelly cube at rest on the plane).
 """
-import numpy as np
-
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..contact import apply_contact_forces
-from ..forces import accelerations, force_columns, free_accelerations
+from ..forces import accelerations, free_accelerations
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive, two_stage_scratch
 
 
-@kernel
-def predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns):
+@inline_kernel
+def predict_reevaluate_step(model, state, scratch, h):
+    x, v = state
+    a, x_p, v_p, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_p, x, h, v)
     add_scaled(v_p, v, h, a)
@@ -37,14 +37,13 @@ def predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns):
 
 @kernel
 def advance(model, x, v, h, steps):
-    a, x_p, v_p = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        predict_reevaluate_step(model, x, v, h, a, x_p, v_p, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
+
+
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
 
 
 @register
@@ -53,3 +52,4 @@ class PredictReevaluate(KernelIntegrator):
     order = 1
     summary = "the course framework's 'implicit' Euler: explicit predict, re-evaluate, step"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

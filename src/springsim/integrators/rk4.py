@@ -8,14 +8,16 @@ stages accumulates in (dx, dv).
 """
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from . import KernelIntegrator, register
-from ._steps import add_scaled, finish_step
+from ._steps import add_scaled, drive
 
 
-@kernel
-def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv, columns):
+@inline_kernel
+def rk4_step(model, state, scratch, h):
+    x, v = state
+    x_k, v_k, a, dx, dv, columns = scratch
     accelerations(model, x, v, h, a, columns)      # k1 = (v, a)
     dx[:] = v
     dv[:] = a
@@ -39,16 +41,21 @@ def rk4_step(model, x, v, h, x_k, v_k, a, dx, dv, columns):
 
 
 @kernel
+def rk4_scratch(x):
+    """x_k, v_k, a, dx, dv and the force columns."""
+    return (np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x),
+            np.empty_like(x), force_columns(x))
+
+
+@kernel
 def advance(model, x, v, h, steps):
-    x_k, v_k, a = np.empty_like(x), np.empty_like(x), np.empty_like(x)
-    dx, dv = np.empty_like(x), np.empty_like(x)
-    columns = force_columns(x)
-    for step in range(steps):
-        rk4_step(model, x, v, h, x_k, v_k, a, dx, dv, columns)
-        particle = finish_step(model, x, v)
-        if particle >= 0:
-            return step + 1, particle
-    return steps, -1
+    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
+
+
+@parallel_kernel
+def parallel_advance(model, x, v, h, steps):
+    """advance, its loops on threads (integrators.KernelIntegrator)."""
+    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
 
 
 @register
@@ -57,3 +64,4 @@ class RK4(KernelIntegrator):
     order = 4
     summary = "classical fourth-order Runge-Kutta"
     kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)

@@ -34,8 +34,10 @@ class Controls:
     """The viewer's state: a scene, its simulation, the run state and the live figures."""
 
     def __init__(self, scene="jelly-plane", integrator: str | None = None,
-                 dt: float | None = None):
-        """``scene``: a built-in scene's name, a scene file, or a Scene."""
+                 dt: float | None = None, threads: int | None = None):
+        """``scene``: a built-in scene's name, a scene file, or a Scene; ``threads``: the most
+        threads a step may use (default: all cores)."""
+        self.threads = threads
         self.draw = DrawOptions()
         self.mouse = MouseSpring()
         self.stats = FrameStats()
@@ -52,7 +54,8 @@ class Controls:
             scene, self.scene_name = copy.deepcopy(scene), scene.name
         else:
             scene, self.scene_name = load_scene(scene), str(scene)
-        self._replace(Simulation(scene, integrator=integrator, dt=dt), keep_state=False)
+        self._replace(Simulation(scene, integrator=integrator, dt=dt, threads=self.threads),
+                      keep_state=False)
         self.steps_per_frame = real_time_steps(self.sim.dt)
 
     def choose_scene(self, name: str) -> bool:
@@ -177,7 +180,7 @@ class Controls:
         scene = copy.deepcopy(self.sim.scene)
         change(scene)
         try:
-            sim = Simulation(scene)
+            sim = Simulation(scene, threads=self.threads)
         except SceneError as error:
             self.message = str(error)
             return False

@@ -1,0 +1,54 @@
+"""Threads: a large model's force loop runs in fixed partitions (spring_runs.py), so that its
+results are the same bit for bit whatever the number of threads, and still the spring forces."""
+import numpy as np
+import pytest
+
+from springsim import SceneError, Simulation
+from springsim.forces import forces
+from springsim.integrators import available_threads
+from springsim.reference import reference_forces
+from springsim.scenefile import load_scene
+from springsim.spring_runs import PARTITION, partition_count
+
+EDGE = 51   # 132,651 particles: the smallest cube whose force loop has two partitions
+
+
+@pytest.fixture(scope="module")
+def large_cube():
+    scene = load_scene("jelly-plane", [f"bodies.0.particles_per_edge={EDGE}"])
+    simulation = Simulation(scene, integrator="explicit_euler", dt=1e-4)
+    rng = np.random.default_rng(3)
+    simulation.state.positions += 0.01 * rng.standard_normal(simulation.state.positions.shape)
+    simulation.state.velocities[:] = rng.standard_normal(simulation.state.velocities.shape)
+    return simulation
+
+
+def test_the_large_cube_is_cut_into_partitions(large_cube):
+    assert large_cube.model.particle_count >= 2 * PARTITION
+    assert partition_count(large_cube.model.particle_count) == 2
+
+
+def test_partitioned_spring_forces_match_the_reference(large_cube):
+    x, v = large_cube.state.positions, large_cube.state.velocities
+    expected = reference_forces(large_cube.model, x, v)
+    assert np.allclose(forces(large_cube.model.arrays, x, v), expected, rtol=0, atol=1e-9)
+
+
+def test_steps_are_bit_identical_for_any_number_of_threads(large_cube):
+    start = large_cube.state.copy()
+    results = []
+    for threads in sorted({1, min(2, available_threads()), available_threads()}):
+        large_cube.state = start.copy()
+        large_cube.threads = threads
+        large_cube.step(3)
+        results.append((large_cube.state.positions.copy(), large_cube.state.velocities.copy()))
+    for positions, velocities in results[1:]:
+        assert np.array_equal(positions, results[0][0])
+        assert np.array_equal(velocities, results[0][1])
+    assert not np.array_equal(results[0][0], start.positions)   # it did move
+
+
+@pytest.mark.parametrize("threads", [0, -1, 2.0, True, "2", 10 ** 6])
+def test_a_bad_thread_count_is_refused_before_any_work(threads):
+    with pytest.raises(SceneError, match="threads"):
+        Simulation(load_scene("jelly-plane"), threads=threads)
