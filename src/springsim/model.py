@@ -11,6 +11,7 @@ import numpy as np
 from .bodies.balls import collision_parameters
 from .spring_runs import build_spring_runs
 from .springs import SpringKind
+from .surfaces import Embedding
 from .terrains import pack_terrains
 
 
@@ -27,10 +28,9 @@ class ModelArrays(NamedTuple):
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
     run_rest_length: np.ndarray  # (E,) m, the runs' rest lengths; negative at a hole
     loose_springs: np.ndarray    # (L,) uint32 numbers of the springs in no run
-    terrain_kind: np.ndarray     # (T,) PLANE, SPHERE or BOWL
-    terrain_point: np.ndarray    # (T, 3) plane point or sphere centre
-    terrain_normal: np.ndarray   # (T, 3) plane unit normal
-    terrain_radius: np.ndarray   # (T,)
+    terrain_kind: np.ndarray     # (T,) int64, the kind number (terrains/base.py)
+    terrain_parameters: np.ndarray  # (T, K) each terrain's parameters, as its kind packs them
+    terrain_data: np.ndarray     # (D,) the data the terrains share (a mesh's distance grid)
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
@@ -121,14 +121,23 @@ def build_model(scene) -> Model:
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius))
-    bodies = tuple(BodySlice(getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{i}",
-                             int(offsets[i]), int(offsets[i + 1]), b.surface + offsets[i])
+    bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])
     velocities[pinned] = 0.0
     return Model(arrays=arrays, mass=mass, pinned=pinned, spring_kind=kinds, bodies=bodies,
                  initial_positions=positions, initial_velocities=velocities,
                  terrains=tuple(scene.terrains), scene_bodies=tuple(scene.bodies))
+
+
+def body_slice(spec, built, number: int, start: int, stop: int) -> BodySlice:
+    """Where body ``number`` lies in the model, its surface in global particle numbers (or, for
+    an embedded surface, its embedding's particles in global numbers)."""
+    name = getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{number}"
+    if built.embedding is None:
+        return BodySlice(name, start, stop, built.surface + start)
+    embedding = Embedding(built.embedding.particles + start, built.embedding.weights)
+    return BodySlice(name, start, stop, built.surface, embedding)
 
 
 def particle_drag(scene, built) -> np.ndarray:
