@@ -168,7 +168,7 @@ def build_lattice(mesh, spacing: float, key: str):
                                    sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
     inside = distance <= INSIDE_TOLERANCE * spacing
     suggestion = f"try <= {float(np.min(mesh.vertices.max(axis=0) - low)) / 4:.3g}"
-    require(inside.any(), key, spacing, f"is larger than the mesh: no lattice point lies "
+    require(inside.any(), key, spacing, f"is too large for the mesh: no lattice point lies "
                                         f"inside it; {suggestion}")
     index = np.full(len(points), -1, np.int64)
     index[inside] = np.arange(np.count_nonzero(inside))
