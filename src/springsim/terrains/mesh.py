@@ -39,20 +39,22 @@ MAX_NODES = 8_000_000   # 64 MB of float64: the grid's size limit
 
 @kernel
 def mesh_distance(row, data, x0, x1, x2):
-    """row: the grid's origin (0-2), cell size (3), node counts (4-6) and first value in data (7);
-    data holds the node values, z fastest."""
+    """row: the grid's origin (0-2), cell size (3), node counts (4-6), first value in data (7)
+    and 1 / cell size (8); data holds the node values, z fastest."""
     cell, n0, n1, n2, start = row[3], int(row[4]), int(row[5]), int(row[6]), int(row[7])
     # position in cells, clamped into the grid
-    u, v, w = (x0 - row[0]) / cell, (x1 - row[1]) / cell, (x2 - row[2]) / cell
+    u, v, w = (x0 - row[0]) * row[8], (x1 - row[1]) * row[8], (x2 - row[2]) * row[8]
     cu, cv, cw = min(max(u, 0.0), n0 - 1.0), min(max(v, 0.0), n1 - 1.0), min(max(w, 0.0), n2 - 1.0)
     i, j, k = min(int(cu), n0 - 2), min(int(cv), n1 - 2), min(int(cw), n2 - 2)
     fu, fv, fw = cu - i, cv - j, cw - k
-    base = start + (i * n1 + j) * n2 + k
-    di, dj = n1 * n2, n2
-    c000, c001 = data[base], data[base + 1]
-    c010, c011 = data[base + dj], data[base + dj + 1]
-    c100, c101 = data[base + di], data[base + di + 1]
-    c110, c111 = data[base + di + dj], data[base + di + dj + 1]
+    # unsigned indices: Numba then skips its negative-index checks (eight per lookup)
+    one = np.uint64(1)
+    base = np.uint64(start + (i * n1 + j) * n2 + k)
+    di, dj = np.uint64(n1 * n2), np.uint64(n2)
+    c000, c001 = data[base], data[base + one]
+    c010, c011 = data[base + dj], data[base + dj + one]
+    c100, c101 = data[base + di], data[base + di + one]
+    c110, c111 = data[base + di + dj], data[base + di + dj + one]
     # trilinear interpolation, and its gradient (per cell) as the normal
     c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
     c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
@@ -64,13 +66,15 @@ def mesh_distance(row, data, x0, x1, x2):
     gu_1 = (c101 - c001) + fv * ((c111 - c011) - (c101 - c001))
     gu = gu_0 + fw * (gu_1 - gu_0)
     du, dv, dw = u - cu, v - cv, w - cw
-    outside = math.sqrt(du * du + dv * dv + dw * dw)
-    if outside > 0.0:   # beyond the grid: free space, the normal pointing away from the grid
+    if du != 0.0 or dv != 0.0 or dw != 0.0:
+        # beyond the grid: free space, the normal pointing away from the grid
+        outside = math.sqrt(du * du + dv * dv + dw * dw)
         return outside * cell + max(phi, 0.0), du / outside, dv / outside, dw / outside
     size = math.sqrt(gu * gu + gv * gv + gw * gw)
     if size == 0.0:
         return phi, 0.0, 1.0, 0.0
-    return phi, gu / size, gv / size, gw / size
+    inverse = 1.0 / size
+    return phi, gu * inverse, gv * inverse, gw * inverse
 
 
 @dataclass
@@ -82,7 +86,7 @@ class DistanceGrid:
     values: np.ndarray   # (n0, n1, n2)
 
     def row(self, data_start: int) -> list:
-        return [*self.origin, self.cell, *self.values.shape, float(data_start)]
+        return [*self.origin, self.cell, *self.values.shape, float(data_start), 1.0 / self.cell]
 
     def lookup(self, x: np.ndarray) -> np.ndarray:
         """The kernel's phi for points (n, 3), in NumPy."""
