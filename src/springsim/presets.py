@@ -52,11 +52,12 @@ def ball_rain_on_cloth(particles_per_edge: int = 100, balls_per_edge: int = 10) 
 
 
 def jelly_torus() -> Scene:
-    """A jelly torus (major radius 1 m, tube radius 0.4 m, 0.2 m lattice) dropped tilted on the
-    top step of a flight of stairs (an open mesh: treads and risers), rolling down it."""
+    """A jelly torus (major radius 1 m, tube radius 0.4 m, 0.2 m lattice) thrown tilted onto the
+    top of a flight of stairs (an open mesh: treads and risers); it lands, hops down a step and
+    settles."""
     torus = MeshBody(file=str(MESHES / "torus.obj"), spacing=0.2, rotation_degrees=75.0,
                      rotation_axis=(1.0, 0.0, 0.0), position=(1.2, 4.2, 0.0),
-                     velocity=(1.5, 0.0, 0.0))
+                     velocity=(3.0, 0.0, 0.0))
     stairs = MeshTerrain(file=str(MESHES / "stairs.obj"))
     return Scene(name="jelly-torus", bodies=[torus], terrains=[stairs], duration=6.0)
 
