@@ -146,3 +146,12 @@ def test_bad_meshes_are_refused_with_one_line(meshes, tmp_path):
 def test_a_lattice_too_large_for_memory_is_refused_before_it_is_built(meshes):
     error = refusal(MeshBody(file=str(meshes / "box.obj"), spacing=1e-4))
     assert error.key == "bodies.0.spacing" and "GiB" in error.allowed
+
+
+def test_surfaces_give_balls_as_centres_and_radii():
+    simulation = springsim.Simulation(springsim.load_scene("jelly-balls"))
+    cube, balls = simulation.surfaces()
+    assert cube.radii is None and len(cube.triangles) == 6 * 2 * 81
+    assert balls.triangles.size == 0
+    np.testing.assert_array_equal(balls.radii, [0.5, 0.5, 0.5])
+    np.testing.assert_array_equal(balls.vertices, simulation.positions[-3:])
