@@ -133,3 +133,30 @@ def test_a_jelly_torus_comes_to_rest_on_a_mesh_floor(folder):
     # the surface rides the lattice, whose outer particles lie up to a spacing inside it
     vertices = simulation.surfaces()[0].vertices
     assert floor.signed_distance(vertices).min() >= -spacing
+
+
+CACHED_CALL = """
+import numpy as np
+import springsim
+from springsim.contact import apply_contact_forces
+model = springsim.Simulation(springsim.load_scene("jelly-plane")).model
+x = model.initial_positions.copy()
+a = np.zeros_like(x)
+apply_contact_forces(model.arrays, x, np.zeros_like(x), 1e-3, a)
+stats = apply_contact_forces.stats
+print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+"""
+
+
+def test_kernels_calling_the_generated_dispatcher_load_from_the_cache():
+    """The dispatcher is generated at import (terrains/dispatch.py) and has no cache of its own;
+    the contact kernel that calls it is cached with it inside, so a second process compiles
+    nothing (the first fills the cache if no test has yet)."""
+    import subprocess
+    import sys
+
+    for _ in range(2):
+        output = subprocess.run([sys.executable, "-c", CACHED_CALL], check=True,
+                                capture_output=True, text=True).stdout
+    hits, misses = output.split()[-2:]
+    assert (hits, misses) == ("1", "0")
