@@ -155,3 +155,23 @@ def test_surfaces_give_balls_as_centres_and_radii():
     assert balls.triangles.size == 0
     np.testing.assert_array_equal(balls.radii, [0.5, 0.5, 0.5])
     np.testing.assert_array_equal(balls.vertices, simulation.positions[-3:])
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply", ".off", ".glb", ".gltf"])
+def test_every_format_reads_as_the_same_mesh(tmp_path, suffix):
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    path = tmp_path / f"box{suffix}"
+    box.export(path)
+    body = MeshBody(file=str(path), spacing=0.25)
+    body.validate("bodies.0")
+    assert body.mesh().vertices.shape == (8, 3)
+    np.testing.assert_allclose(np.sort(body.mesh().vertices, axis=0), np.sort(box.vertices, axis=0))
+
+
+def test_the_command_line_refuses_a_bad_mesh_in_one_line(tmp_path):
+    (tmp_path / "bad.toml").write_text('[[bodies]]\ntype = "mesh"\nfile = "nowhere.obj"\n')
+    result = subprocess.run([sys.executable, "-m", "springsim", "run", str(tmp_path / "bad.toml"),
+                             "--out", str(tmp_path / "x.npz")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert "bodies.0.file" in result.stderr and "no such file" in result.stderr
