@@ -24,7 +24,23 @@ def _default_springs():
 
 
 @dataclass
-class Cube:
+class LatticeSprings:
+    """The spring tables of a lattice body (the cube's and a mesh body's): structural, shear and
+    bend springs, and optional face-to-face springs."""
+
+    structural: SpringParameters = field(default_factory=_default_springs)
+    shear: SpringParameters = field(default_factory=_default_springs)
+    bend: SpringParameters = field(default_factory=_default_springs)
+    face_springs: bool = False
+    face: SpringParameters = field(default_factory=_default_springs)
+
+    def validate_springs(self, key: str) -> None:
+        for kind in ("structural", "shear", "bend", "face"):
+            getattr(self, kind).validate(f"{key}.{kind}")
+
+
+@dataclass
+class Cube(LatticeSprings):
     """A soft cube. Lengths in m, masses in kg, angles in degrees."""
 
     particles_per_edge: int = 10
@@ -34,11 +50,6 @@ class Cube:
     velocity: tuple = (0.0, 0.0, 0.0)
     rotation_degrees: float = 0.0
     rotation_axis: tuple = (1.0, 0.0, 1.0)
-    structural: SpringParameters = field(default_factory=_default_springs)
-    shear: SpringParameters = field(default_factory=_default_springs)
-    bend: SpringParameters = field(default_factory=_default_springs)
-    face_springs: bool = False
-    face: SpringParameters = field(default_factory=_default_springs)
     pinned: tuple = ()
 
     def validate(self, key: str) -> None:
@@ -58,8 +69,7 @@ class Cube:
                 "must be > 0 kg")
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
-        for kind in ("structural", "shear", "bend", "face"):
-            getattr(self, kind).validate(f"{key}.{kind}")
+        self.validate_springs(key)
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,

@@ -17,17 +17,16 @@ the cube's springs, with the mesh's own surface riding the lattice.
 import functools
 import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SceneError, is_finite, require
 from ..meshfiles import check_closed, placed, read_mesh, validate_placement
-from ..springs import SpringParameters
 from ..surfaces import Embedding
 from . import BuiltBody
-from .cube import lattice_pattern, spring_parameters
+from .cube import LatticeSprings, lattice_pattern, spring_parameters
 
 INSIDE_TOLERANCE = 1e-6   # of the spacing: a lattice point this close to the surface is inside
 # memory per lattice point of the bounding box while testing it (positions, distances, closest
@@ -40,15 +39,11 @@ class ThinPartsWarning(UserWarning):
     """Some vertices of a mesh body lie in parts too thin for its lattice."""
 
 
-def _default_springs():
-    return SpringParameters(ks=2000.0, kd=60.0)
-
-
 @dataclass
-class MeshBody:
+class MeshBody(LatticeSprings):
     """A jelly body filling the closed mesh in ``file``, scaled, rotated (degrees about
     ``rotation_axis``, about the file's origin) and moved by ``position`` (m); ``spacing`` (m)
-    between lattice particles of ``particle_mass`` (kg); the cube's springs."""
+    between lattice particles of ``particle_mass`` (kg); the cube's springs (LatticeSprings)."""
 
     file: str = ""
     spacing: float = 0.5
@@ -58,11 +53,6 @@ class MeshBody:
     position: tuple = (0.0, 0.0, 0.0)
     velocity: tuple = (0.0, 0.0, 0.0)
     particle_mass: float = 1.0
-    structural: SpringParameters = field(default_factory=_default_springs)
-    shear: SpringParameters = field(default_factory=_default_springs)
-    bend: SpringParameters = field(default_factory=_default_springs)
-    face_springs: bool = False
-    face: SpringParameters = field(default_factory=_default_springs)
     pinned: tuple = ()
 
     def validate(self, key: str) -> None:
@@ -73,8 +63,7 @@ class MeshBody:
                 self.velocity, "must be three finite numbers (m/s)")
         require(is_finite(self.particle_mass) and self.particle_mass > 0,
                 f"{key}.particle_mass", self.particle_mass, "must be > 0 kg")
-        for kind in ("structural", "shear", "bend", "face"):
-            getattr(self, kind).validate(f"{key}.{kind}")
+        self.validate_springs(key)
         mesh = self.mesh(f"{key}.file")
         volume = check_closed(mesh, f"{key}.file", self.file)
         check_memory(mesh, volume, self.spacing, f"{key}.spacing")
