@@ -4,12 +4,12 @@ ramp) collides on the side its face normals point to.
 The distance query is a signed distance grid, built once when the model is built, and looked up
 trilinearly in the kernel, its gradient giving the normal. Why a grid and not a BVH with exact
 closest points: contact asks every particle for its distance to every terrain in every stage of
-every step, and a grid answers in constant time with eight neighbouring loads and no branches
-(a particle's contact costs about as much as with the analytic plane: benchmarks/mesh_terrain.py),
-where a BVH walks a tree per particle. A grid is exact where the distance is linear across a
-cell: on the flat parts of a mesh (ramps, floors, stairs' treads) trilinear interpolation
-reproduces the exact distance and normal to round-off, so a ramp gives the analytic tilted plane's
-outcome. Curved parts are smoothed at the scale of a cell (``resolution`` cells along the longest
+every step, and a grid answers in constant time with eight neighbouring loads and no search,
+where a BVH walks a tree per particle (benchmarks/mesh_terrain.py: the whole contact pass costs
+about 26 ns a particle against the plane's 6 ns, the lookup itself about 13 ns). A grid is
+exact where the distance is linear across a cell: on the flat parts of a mesh (ramps, floors,
+stairs' treads) trilinear interpolation reproduces the exact distance and normal to round-off, so
+a ramp gives the analytic tilted plane's outcome. Curved parts are smoothed at the scale of a cell (``resolution`` cells along the longest
 side), and sharp edges are rounded off at that scale.
 
 The grid's values are the exact signed distances of its nodes (libigl, sign from the
