@@ -68,7 +68,8 @@ def particles_on(terrain, count: int, rng) -> np.ndarray:
 
 def contact_cost(terrain, x) -> float:
     model = build_model(Scene(bodies=[Cube(particles_per_edge=2)], terrains=[terrain]))
-    arrays = model.arrays._replace(inv_mass=np.ones(len(x)), radius=np.zeros(len(x)))
+    arrays = model.arrays._replace(inv_mass=np.ones(len(x)), radius=np.zeros(len(x)),
+                                   terrain_offset=np.zeros(len(x)))
     v = np.zeros_like(x)
     a = np.tile(arrays.gravity, (len(x), 1))
     return best_time(lambda: apply_contact_forces(arrays, x, v, 1e-3, a.copy()), 10) / len(x)

@@ -43,7 +43,7 @@ def apply_contact_forces(model, x, v, h, a):
         for t in range(epsilon.shape[0]):
             phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
                                                model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                               model.radius[i])
+                                               model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
@@ -96,7 +96,7 @@ def resolve_terrain_impacts(model, x, v):
         for t in range(epsilon.shape[0]):
             phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
                                                model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                               model.radius[i])
+                                               model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz

@@ -18,6 +18,8 @@ from .terrains import pack_terrains
 class ModelArrays(NamedTuple):
     inv_mass: np.ndarray         # (P,) 1/kg, zero for pinned particles
     radius: np.ndarray           # (P,) m, contact radius (zero for points)
+    terrain_offset: np.ndarray   # (P,) m, kept between a particle and a terrain: its contact
+                                 # radius, or how far a mesh body's surface reaches beyond it
     gravity: np.ndarray          # (3,) m/s^2
     drag: np.ndarray             # (P,) viscous drag coefficient c (N s/m): f = -c v
     springs: np.ndarray          # (S, 2) uint32 particle numbers (unsigned: no wrap-around checks)
@@ -116,6 +118,9 @@ def build_model(scene) -> Model:
 
     arrays = ModelArrays(
         inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
+        terrain_offset=np.concatenate([b.terrain_offsets if b.terrain_offsets is not None
+                                       else radius[start:start + len(b.masses)]
+                                       for b, start in zip(built, offsets)]),
         gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),

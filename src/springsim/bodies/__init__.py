@@ -22,6 +22,9 @@ class BuiltBody:
     # a surface embedded in the lattice (mesh bodies): surfaces.Embedding with particle numbers
     # local to the body, and ``surface`` then holds triangles of the embedded vertices
     embedding: object = None
+    # (n,) m: how far the body's surface reaches beyond each particle, kept clear of terrains
+    # (mesh bodies; None: the contact radius, zero for points)
+    terrain_offsets: np.ndarray | None = None
 
 
 __all__ = ["BuiltBody", "SpringParameters"]

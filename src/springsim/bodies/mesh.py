@@ -13,6 +13,12 @@ the cube's springs, with the mesh's own surface riding the lattice.
   with the weights extended beyond it. Trilinear weights reproduce any affine map, so at t = 0
   the surface is the input mesh to round-off either way. A vertex farther than one spacing from
   every full cell lies in a part too thin for the lattice; a warning says how many.
+- Contact: terrains push on the particles, and the surface reaches up to about a spacing beyond
+  the outer ones. Each particle therefore keeps a terrain at the distance of the farthest
+  surface vertex for which it is the nearest corner of its cell (its ``terrain_offsets``), as a
+  ball keeps its radius: every vertex lies within that distance of a particle that stays that far
+  from the terrain, so no vertex of a body at rest goes below it. Where the surface passes
+  through the particles (a box), the offsets are zero.
 """
 import functools
 import os
@@ -94,6 +100,7 @@ class MeshBody(LatticeSprings):
                           ThinPartsWarning, stacklevel=2)
         springs, kinds = lattice_pattern(index, self)
         count = len(positions)
+        vertices = self.mesh().vertices
         pinned = np.zeros(count, bool)
         pinned[list(self.pinned)] = True
         return BuiltBody(
@@ -102,7 +109,8 @@ class MeshBody(LatticeSprings):
             masses=np.full(count, float(self.particle_mass)),
             pinned=pinned, springs=springs, spring_kind=kinds,
             spring_parameters=spring_parameters(self),
-            surface=self.mesh().triangles.astype(np.int32), embedding=embedding)
+            surface=self.mesh().triangles.astype(np.int32), embedding=embedding,
+            terrain_offsets=surface_offsets(vertices, positions, embedding, self.spacing))
 
 
 def lattice_counts(vertices: np.ndarray, spacing: float) -> np.ndarray:
@@ -167,6 +175,17 @@ def build_lattice(mesh, spacing: float, key: str):
                                          f"wholly inside it, to carry its surface; {suggestion}")
     embedding, thin = embed(mesh.vertices, low, spacing, index, full)
     return points[inside], index, embedding, thin
+
+
+def surface_offsets(vertices, positions, embedding: Embedding, spacing: float) -> np.ndarray:
+    """(n,) m: for each particle, the distance to the farthest vertex whose nearest cell corner
+    it is (module doc); distances below round-off are zero."""
+    corner = embedding.particles[np.arange(len(vertices)), np.argmax(embedding.weights, axis=1)]
+    distance = np.linalg.norm(vertices - positions[corner], axis=1)
+    offsets = np.zeros(len(positions))
+    np.maximum.at(offsets, corner, distance)
+    offsets[offsets < 1e-9 * spacing] = 0.0
+    return offsets
 
 
 def full_cells(index: np.ndarray) -> np.ndarray:

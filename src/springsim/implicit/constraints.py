@@ -73,7 +73,7 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
     for t in range(epsilon.shape[0]):
         phi, mx, my, mz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
                                            model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                           model.radius[i])
+                                           model.terrain_offset[i])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:
