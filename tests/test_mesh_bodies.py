@@ -175,3 +175,19 @@ def test_the_command_line_refuses_a_bad_mesh_in_one_line(tmp_path):
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1
     assert "bodies.0.file" in result.stderr and "no such file" in result.stderr
+
+
+def test_vertices_in_parts_too_thin_for_the_lattice_are_counted_in_a_warning(tmp_path):
+    """A 2 m box and, 0.5 m beside it, a 5 cm one: at spacing 0.25 m the small box holds no
+    lattice point, so its 8 vertices ride the big box's nearest full cell (still exact at t = 0)."""
+    from springsim.bodies.mesh import ThinPartsWarning
+
+    big = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
+    small = trimesh.creation.box(extents=(0.05, 0.05, 0.05))
+    small.apply_translation((1.5, 0.0, 0.0))
+    trimesh.util.concatenate([big, small]).export(tmp_path / "two.obj")
+    body = MeshBody(file=str(tmp_path / "two.obj"), spacing=0.25, position=(0.0, 3.0, 0.0))
+    with pytest.warns(ThinPartsWarning, match="8 of 16 vertices"):
+        simulation = springsim.Simulation(Scene(bodies=[body], terrains=[Plane()]))
+    np.testing.assert_allclose(simulation.surfaces()[0].vertices, body.mesh().vertices,
+                               atol=1e-12)
