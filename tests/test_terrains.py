@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import springsim
-from springsim.contact import terrain_distance
+from springsim.terrains import pack_terrains, terrain_distance
 from springsim.forces import accelerations, force_columns
 from springsim.terrains import Bowl, Plane, Sphere, tilted_plane
 
@@ -130,10 +130,12 @@ def test_kernel_and_terrain_agree_on_the_signed_distance(terrain):
     x = rng.uniform(-8.0, 12.0, (200, 3))
     radius = rng.uniform(0.0, 0.3, 200)
     expected = terrain.signed_distance(x, radius)
-    point, normal, sphere_radius = terrain.packed()
+    packed = pack_terrains([terrain])
     for i in range(len(x)):
-        phi, nx, ny, nz = terrain_distance(terrain.kind, point, normal, sphere_radius,
-                                           x[i, 0], x[i, 1], x[i, 2], radius[i])
+        phi, nx, ny, nz = terrain_distance(packed["terrain_kind"][0],
+                                           packed["terrain_parameters"][0],
+                                           packed["terrain_data"], x[i, 0], x[i, 1], x[i, 2],
+                                           radius[i])
         assert phi == pytest.approx(expected[i], abs=1e-12)
         assert math.hypot(nx, ny, nz) == pytest.approx(1.0, abs=1e-14)
 

@@ -30,42 +30,20 @@ How contact enters an integrator, and why:
 import math
 
 from ._jit import kernel
-from .terrains import BOWL, PLANE
-
-
-@kernel
-def terrain_distance(kind, p, n, terrain_radius, x0, x1, x2, particle_radius):
-    """Signed distance (m) from a particle's surface to a terrain, and the terrain's unit normal.
-
-    ``p`` is the plane's point or the sphere's centre, ``n`` the plane's normal. Scalars only:
-    this runs for every particle and terrain, and array arguments would cost reference counting.
-    """
-    if kind == PLANE:
-        nx, ny, nz = n[0], n[1], n[2]
-        phi = (x0 - p[0]) * nx + (x1 - p[1]) * ny + (x2 - p[2]) * nz - particle_radius
-        return phi, nx, ny, nz
-    dx, dy, dz = x0 - p[0], x1 - p[1], x2 - p[2]
-    r = math.sqrt(dx * dx + dy * dy + dz * dz)
-    if r == 0.0:
-        nx, ny, nz = 0.0, 1.0, 0.0  # at the very centre any direction will do
-    else:
-        nx, ny, nz = dx / r, dy / r, dz / r
-    if kind == BOWL:
-        return terrain_radius - r - particle_radius, -nx, -ny, -nz
-    return r - terrain_radius - particle_radius, nx, ny, nz
+from .terrains import terrain_distance
 
 
 @kernel
 def apply_contact_forces(model, x, v, h, a):
     """Cancel accelerations into touched terrains and add Coulomb friction (see module doc)."""
-    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
-    radii, epsilon, friction = model.terrain_radius, model.terrain_epsilon, model.terrain_friction
+    epsilon, friction = model.terrain_epsilon, model.terrain_friction
     for i in range(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
-        for t in range(kinds.shape[0]):
-            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
-                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+        for t in range(epsilon.shape[0]):
+            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                               model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
@@ -109,17 +87,16 @@ def coulomb_friction(ax, ay, az, tx, ty, tz, limit, h):
 @kernel
 def resolve_terrain_impacts(model, x, v):
     """After a step: reflect approaching velocities with restitution, lift particles out."""
-    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
-    radii, epsilon, restitution = (model.terrain_radius, model.terrain_epsilon,
-                                   model.terrain_restitution)
+    epsilon, restitution = model.terrain_epsilon, model.terrain_restitution
     g = model.gravity
     g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     for i in range(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
-        for t in range(kinds.shape[0]):
-            phi, nx, ny, nz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
-                                               x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+        for t in range(epsilon.shape[0]):
+            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                               model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz

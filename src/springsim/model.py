@@ -11,12 +11,15 @@ import numpy as np
 from .bodies.balls import collision_parameters
 from .spring_runs import build_spring_runs
 from .springs import SpringKind
+from .surfaces import Embedding
 from .terrains import pack_terrains
 
 
 class ModelArrays(NamedTuple):
     inv_mass: np.ndarray         # (P,) 1/kg, zero for pinned particles
     radius: np.ndarray           # (P,) m, contact radius (zero for points)
+    terrain_offset: np.ndarray   # (P,) m, kept between a particle and a terrain: its contact
+                                 # radius, or how far a mesh body's surface reaches beyond it
     gravity: np.ndarray          # (3,) m/s^2
     drag: np.ndarray             # (P,) viscous drag coefficient c (N s/m): f = -c v
     springs: np.ndarray          # (S, 2) uint32 particle numbers (unsigned: no wrap-around checks)
@@ -27,10 +30,9 @@ class ModelArrays(NamedTuple):
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
     run_rest_length: np.ndarray  # (E,) m, the runs' rest lengths; negative at a hole
     loose_springs: np.ndarray    # (L,) uint32 numbers of the springs in no run
-    terrain_kind: np.ndarray     # (T,) PLANE, SPHERE or BOWL
-    terrain_point: np.ndarray    # (T, 3) plane point or sphere centre
-    terrain_normal: np.ndarray   # (T, 3) plane unit normal
-    terrain_radius: np.ndarray   # (T,)
+    terrain_kind: np.ndarray     # (T,) int64, the kind number (terrains/base.py)
+    terrain_parameters: np.ndarray  # (T, K) each terrain's parameters, as its kind packs them
+    terrain_data: np.ndarray     # (D,) the data the terrains share (a mesh's distance grid)
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
@@ -116,19 +118,31 @@ def build_model(scene) -> Model:
 
     arrays = ModelArrays(
         inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
+        terrain_offset=np.concatenate([b.terrain_offsets if b.terrain_offsets is not None
+                                       else radius[start:start + len(b.masses)]
+                                       for b, start in zip(built, offsets)]),
         gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius))
-    bodies = tuple(BodySlice(getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{i}",
-                             int(offsets[i]), int(offsets[i + 1]), b.surface + offsets[i])
+    bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])
     velocities[pinned] = 0.0
     return Model(arrays=arrays, mass=mass, pinned=pinned, spring_kind=kinds, bodies=bodies,
                  initial_positions=positions, initial_velocities=velocities,
                  terrains=tuple(scene.terrains), scene_bodies=tuple(scene.bodies))
+
+
+def body_slice(spec, built, number: int, start: int, stop: int) -> BodySlice:
+    """Where body ``number`` lies in the model, its surface in global particle numbers (or, for
+    an embedded surface, its embedding's particles in global numbers)."""
+    name = getattr(spec, "name", "") or f"{type(spec).__name__.lower()}{number}"
+    if built.embedding is None:
+        return BodySlice(name, start, stop, built.surface + start)
+    embedding = Embedding(built.embedding.particles + start, built.embedding.weights)
+    return BodySlice(name, start, stop, built.surface, embedding)
 
 
 def particle_drag(scene, built) -> np.ndarray:

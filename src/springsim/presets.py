@@ -1,12 +1,18 @@
 """The built-in scenes, with the course framework's defaults."""
+from pathlib import Path
+
 import numpy as np
 
 from .bodies.balls import Ball, Balls
 from .bodies.cloth import Cloth
 from .bodies.cube import Cube
+from .bodies.mesh import MeshBody
 from .errors import SceneError
 from .scene import Scene
-from .terrains import Bowl, Plane, Sphere, tilted_plane
+from .terrains import Bowl, MeshTerrain, Plane, Sphere, tilted_plane
+
+# meshes made by scripts/make_meshes.py (trimesh.creation), shipped with the package
+MESHES = Path(__file__).resolve().parent / "meshes"
 
 
 def jelly(name: str, terrain) -> Scene:
@@ -45,6 +51,17 @@ def ball_rain_on_cloth(particles_per_edge: int = 100, balls_per_edge: int = 10) 
                  dt=1e-4)
 
 
+def jelly_torus() -> Scene:
+    """A jelly torus (major radius 1 m, tube radius 0.4 m, 0.2 m lattice) thrown tilted onto the
+    top of a flight of stairs (an open mesh: treads and risers); it lands, hops down a step and
+    settles."""
+    torus = MeshBody(file=str(MESHES / "torus.obj"), spacing=0.2, rotation_degrees=75.0,
+                     rotation_axis=(1.0, 0.0, 0.0), position=(1.2, 4.2, 0.0),
+                     velocity=(3.0, 0.0, 0.0))
+    stairs = MeshTerrain(file=str(MESHES / "stairs.obj"))
+    return Scene(name="jelly-torus", bodies=[torus], terrains=[stairs], duration=6.0)
+
+
 PRESETS = {
     "jelly-plane": (lambda: jelly("jelly-plane", Plane()),
                     "the 10^3 jelly cube dropped on the plane y = -1"),
@@ -58,6 +75,7 @@ PRESETS = {
     "cloth-balls": (cloth_balls, "the reference cloth (25 x 25, corners pinned) catching four "
                                  "balls; dt 1e-4"),
     "cloth-hang": (cloth_hang, "the cloth pinned along one edge, swinging down from flat"),
+    "jelly-torus": (jelly_torus, "a jelly torus (a mesh body) dropped on mesh stairs"),
     "cloth-balls-100": (ball_rain_on_cloth, "benchmark: 100 balls falling on a 100 x 100 cloth"),
 }
 

@@ -130,7 +130,8 @@ def deepest_penetration(model, x: np.ndarray) -> float:
 
 
 def all_surfaces(model) -> np.ndarray:
-    surfaces = [body.surface for body in model.bodies]
+    # particle-number triangles only: an embedded surface (a mesh body) numbers its own vertices
+    surfaces = [body.surface for body in model.bodies if body.embedding is None]
     return np.concatenate(surfaces) if surfaces else np.empty((0, 3), np.int32)
 
 

@@ -69,7 +69,7 @@ def check_bodies_outside_terrains(model) -> None:
     """Reject a model whose bodies start inside a terrain (it would be shot out at once)."""
     for body_index, body in enumerate(model.bodies):
         x = model.initial_positions[body.start:body.stop]
-        radii = model.arrays.radius[body.start:body.stop]
+        radii = model.arrays.terrain_offset[body.start:body.stop]
         for t, terrain in enumerate(model.terrains):
             distance = terrain.signed_distance(x, radii)
             deepest = int(np.argmin(distance))

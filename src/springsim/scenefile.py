@@ -48,12 +48,13 @@ import numpy as np
 from .bodies.balls import Balls
 from .bodies.cloth import Cloth
 from .bodies.cube import Cube
+from .bodies.mesh import MeshBody
 from .errors import SceneError, require
 from .presets import PRESETS, preset
 from .scene import Scene
 from .terrains import TERRAIN_TYPES
 
-BODY_TYPES = {"cube": Cube, "cloth": Cloth, "balls": Balls}
+BODY_TYPES = {"cube": Cube, "cloth": Cloth, "balls": Balls, "mesh": MeshBody}
 
 MAX_SCENE_BYTES = 16 * 2 ** 20   # a scene file is a few kB; 16 MB leaves room for mesh tables
 
@@ -88,7 +89,17 @@ def read_scene_file(path: Path) -> Scene:
     except tomllib.TOMLDecodeError as error:
         raise SceneError("scene", str(path), f"is not valid TOML: {error}") from None
     # A file that does not name its scene is named after itself (and so is its output).
-    return scene_from_table({"name": path.stem, **table})
+    return files_relative_to(scene_from_table({"name": path.stem, **table}), path.parent)
+
+
+def files_relative_to(scene: Scene, folder: Path) -> Scene:
+    """The scene with every body's and terrain's relative ``file`` (a mesh) made relative to
+    ``folder``, the scene file's: a scene file and its meshes move together."""
+    for item in [*scene.bodies, *scene.terrains]:
+        file = getattr(item, "file", None)
+        if isinstance(file, str) and file and not Path(file).expanduser().is_absolute():
+            item.file = str(folder / file)
+    return scene
 
 
 def read_text_safely(path: Path) -> str:

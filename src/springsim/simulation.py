@@ -128,8 +128,10 @@ class Simulation:
 
     def surfaces(self) -> list:
         """Each body's surface at the current state: ``surfaces.Surface`` with ``.name``,
-        ``.vertices`` (V, 3) and ``.triangles`` (T, 3)."""
-        return [body_surface(body, self.state.positions) for body in self.model.bodies]
+        ``.vertices`` (V, 3) and ``.triangles`` (T, 3); a body of balls has their centres as
+        vertices, no triangles, and ``.radii`` (surfaces.py)."""
+        radius = self.model.arrays.radius
+        return [body_surface(body, self.state.positions, radius) for body in self.model.bodies]
 
     def energy(self) -> dict:
         """Kinetic, gravitational, spring and total energy (J) of the current state."""

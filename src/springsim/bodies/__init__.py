@@ -19,6 +19,12 @@ class BuiltBody:
     spring_parameters: dict          # SpringKind -> SpringParameters
     surface: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.int32))  # triangles
     radii: np.ndarray | None = None  # (n,) m, contact radius; zero for points
+    # a surface embedded in the lattice (mesh bodies): surfaces.Embedding with particle numbers
+    # local to the body, and ``surface`` then holds triangles of the embedded vertices
+    embedding: object = None
+    # (n,) m: how far the body's surface reaches beyond each particle, kept clear of terrains
+    # (mesh bodies; None: the contact radius, zero for points)
+    terrain_offsets: np.ndarray | None = None
 
 
 __all__ = ["BuiltBody", "SpringParameters"]

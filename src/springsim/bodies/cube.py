@@ -24,7 +24,23 @@ def _default_springs():
 
 
 @dataclass
-class Cube:
+class LatticeSprings:
+    """The spring tables of a lattice body (the cube's and a mesh body's): structural, shear and
+    bend springs, and optional face-to-face springs."""
+
+    structural: SpringParameters = field(default_factory=_default_springs)
+    shear: SpringParameters = field(default_factory=_default_springs)
+    bend: SpringParameters = field(default_factory=_default_springs)
+    face_springs: bool = False
+    face: SpringParameters = field(default_factory=_default_springs)
+
+    def validate_springs(self, key: str) -> None:
+        for kind in ("structural", "shear", "bend", "face"):
+            getattr(self, kind).validate(f"{key}.{kind}")
+
+
+@dataclass
+class Cube(LatticeSprings):
     """A soft cube. Lengths in m, masses in kg, angles in degrees."""
 
     particles_per_edge: int = 10
@@ -34,11 +50,6 @@ class Cube:
     velocity: tuple = (0.0, 0.0, 0.0)
     rotation_degrees: float = 0.0
     rotation_axis: tuple = (1.0, 0.0, 1.0)
-    structural: SpringParameters = field(default_factory=_default_springs)
-    shear: SpringParameters = field(default_factory=_default_springs)
-    bend: SpringParameters = field(default_factory=_default_springs)
-    face_springs: bool = False
-    face: SpringParameters = field(default_factory=_default_springs)
     pinned: tuple = ()
 
     def validate(self, key: str) -> None:
@@ -64,8 +75,7 @@ class Cube:
         require(np.linalg.norm(self.rotation_axis) > 0, f"{key}.rotation_axis",
                 self.rotation_axis, "must be a non-zero vector")
         require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
-        for kind in ("structural", "shear", "bend", "face"):
-            getattr(self, kind).validate(f"{key}.{kind}")
+        self.validate_springs(key)
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
@@ -92,21 +102,7 @@ class Cube:
             offsets = Rotation.from_rotvec(rotvec).apply(offsets)
         positions = offsets + np.asarray(self.position, float)
 
-        groups = [(SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, self.structural),
-                  (SpringKind.SHEAR, SHEAR_OFFSETS, self.shear),
-                  (SpringKind.BEND, BEND_OFFSETS, self.bend)]
-        springs, kinds = [], []
-        for kind, kind_offsets, params in groups:
-            if not params.builds:
-                continue
-            for offset in kind_offsets:
-                pairs = lattice_springs(index, offset)
-                springs.append(pairs)
-                kinds.append(np.full(len(pairs), kind, np.int8))
-        if self.face_springs and self.face.builds:
-            pairs = face_to_face_springs(index)
-            springs.append(pairs)
-            kinds.append(np.full(len(pairs), SpringKind.FACE, np.int8))
+        springs, kinds = lattice_pattern(index, self)
 
         pinned = np.zeros(n ** 3, bool)
         pinned[list(self.pinned)] = True
@@ -115,21 +111,48 @@ class Cube:
             velocities=np.tile(np.asarray(self.velocity, float), (n ** 3, 1)),
             masses=np.full(n ** 3, float(self.particle_mass)),
             pinned=pinned,
-            springs=np.concatenate(springs) if springs else np.empty((0, 2), np.int32),
-            spring_kind=np.concatenate(kinds) if kinds else np.empty(0, np.int8),
-            spring_parameters={SpringKind.STRUCTURAL: self.structural,
-                               SpringKind.SHEAR: self.shear, SpringKind.BEND: self.bend,
-                               SpringKind.FACE: self.face},
+            springs=springs,
+            spring_kind=kinds,
+            spring_parameters=spring_parameters(self),
             surface=cube_surface(index),
         )
 
 
+def lattice_pattern(index: np.ndarray, body) -> tuple[np.ndarray, np.ndarray]:
+    """The cube's springs between the sites of a 3-D lattice: (S, 2) int32 particle numbers and
+    their (S,) SpringKind. ``index`` maps lattice coordinates to particle numbers, -1 where the
+    lattice has no particle (a mesh body's outside); ``body`` holds the spring tables
+    (structural, shear, bend, face_springs, face). A full lattice gives the cube's springs."""
+    groups = [(SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, body.structural),
+              (SpringKind.SHEAR, SHEAR_OFFSETS, body.shear),
+              (SpringKind.BEND, BEND_OFFSETS, body.bend)]
+    springs, kinds = [], []
+    for kind, kind_offsets, params in groups:
+        if not params.builds:
+            continue
+        for offset in kind_offsets:
+            springs.append(lattice_springs(index, offset))
+            kinds.append(kind)
+    if body.face_springs and body.face.builds:
+        springs.append(face_to_face_springs(index))
+        kinds.append(SpringKind.FACE)
+    springs = [pairs[np.all(pairs >= 0, axis=1)] for pairs in springs]   # both ends present
+    kinds = [np.full(len(pairs), kind, np.int8) for pairs, kind in zip(springs, kinds)]
+    return (np.concatenate(springs) if springs else np.empty((0, 2), np.int32),
+            np.concatenate(kinds) if kinds else np.empty(0, np.int8))
+
+
+def spring_parameters(body) -> dict:
+    return {SpringKind.STRUCTURAL: body.structural, SpringKind.SHEAR: body.shear,
+            SpringKind.BEND: body.bend, SpringKind.FACE: body.face}
+
+
 def face_to_face_springs(index: np.ndarray) -> np.ndarray:
     """Long springs from each face particle to the one on the opposite face (0 to N-1)."""
-    n = index.shape[0]
-    return np.concatenate([lattice_springs(index, tuple(n - 1 if a == axis else 0
-                                                        for a in range(3)))
-                           for axis in range(3)])
+    # rows shorter than 4 would join sites that structural or bend springs already join
+    return np.concatenate([np.empty((0, 2), np.int32)] + [
+        lattice_springs(index, tuple(index.shape[axis] - 1 if a == axis else 0 for a in range(3)))
+        for axis in range(3) if index.shape[axis] >= 4])
 
 
 def cube_surface(index: np.ndarray) -> np.ndarray:

@@ -44,7 +44,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from ..contact import terrain_distance
+from ..terrains import terrain_distance
 
 FREE, CONTACT, PINNED = 0, 1, 2
 SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
@@ -67,13 +67,13 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
     start of a step); without, it means ending the step inside (phi + h u_n < 0).
     """
-    kinds, points, normals = model.terrain_kind, model.terrain_point, model.terrain_normal
-    radii, epsilon = model.terrain_radius, model.terrain_epsilon
+    epsilon = model.terrain_epsilon
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
-    for t in range(kinds.shape[0]):
-        phi, mx, my, mz = terrain_distance(kinds[t], points[t], normals[t], radii[t],
-                                           x[i, 0], x[i, 1], x[i, 2], model.radius[i])
+    for t in range(epsilon.shape[0]):
+        phi, mx, my, mz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                           model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                           model.terrain_offset[i])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:

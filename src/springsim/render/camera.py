@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require
-from ..terrains import Bowl, Plane
 
 FOV_DEGREES = 40.0
 MARGIN = 1.08
@@ -105,35 +104,8 @@ def scene_points(model, positions) -> np.ndarray:
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
                         for z in (low[2], high[2])])
     size = float(np.linalg.norm(high - low))
-    near = [terrain_points_near(terrain, corners, size) for terrain in model.terrains]
+    near = [terrain.points_near(corners, size) for terrain in model.terrains]
     return np.concatenate([bodies, *near])
-
-
-def terrain_points_near(terrain, corners: np.ndarray, size: float) -> np.ndarray:
-    """Points of a terrain under the box with these corners (and ``size``, its diagonal)."""
-    if isinstance(terrain, Plane):
-        n = terrain.unit_normal()
-        return corners - np.outer(terrain.signed_distance(corners), n)
-    center, radius = np.asarray(terrain.center, float), float(terrain.radius)
-    if radius > 2 * size:                      # too big to show whole: the part under the box
-        offsets = corners - center
-        return center + radius * offsets / np.linalg.norm(offsets, axis=1, keepdims=True)
-    directions = _sphere_directions()
-    if isinstance(terrain, Bowl):              # drawn up to its centre's height
-        directions = directions[directions[:, 1] <= 0]
-    return center + radius * directions
-
-
-def _sphere_directions(count: int = 400) -> np.ndarray:
-    """Nearly even unit vectors (a Fibonacci sphere), with the equator itself."""
-    k = np.arange(count) + 0.5
-    y = 1 - 2 * k / count
-    phi = math.pi * (3 - math.sqrt(5)) * k
-    ring = np.sqrt(1 - y * y)
-    spiral = np.stack([ring * np.cos(phi), y, ring * np.sin(phi)], axis=1)
-    angles = np.linspace(0, 2 * math.pi, 64, endpoint=False)
-    equator = np.stack([np.cos(angles), np.zeros_like(angles), np.sin(angles)], axis=1)
-    return np.concatenate([spiral, equator])
 
 
 def camera_path(name: str, model, positions, aspect: float) -> list:

@@ -12,9 +12,8 @@ import polyscope as ps
 
 from ..errors import require
 from ..springs import SpringKind
-from ..terrains import Bowl, Plane, Sphere
+from ..surfaces import body_surface
 from . import colors
-from .terrain_meshes import bowl_mesh, plane_patch, sphere_mesh
 
 
 @dataclass
@@ -66,21 +65,23 @@ class SceneDrawing:
     # --- building -------------------------------------------------------------------------
     def _add_surfaces(self) -> None:
         for number, body in enumerate(self.model.bodies):
-            if body.surface.size == 0:
+            surface = body_surface(body, self.positions)
+            if surface.triangles.size == 0:
                 continue
-            vertices, triangles = np.unique(body.surface, return_inverse=True)
+            # only the vertices the triangles use (a cube's surface skips its inner particles)
+            used, triangles = np.unique(surface.triangles, return_inverse=True)
             triangles = triangles.reshape(-1, 3)
             color = colors.BODY_COLORS[number % len(colors.BODY_COLORS)]
             mesh = ps.register_surface_mesh(f"surface {number}: {body.name}",
-                                            self.positions[vertices], triangles,
+                                            surface.vertices[used], triangles,
                                             smooth_shade=True, color=color, edge_width=0.0)
             if is_closed(triangles):
                 mesh.set_back_face_policy("identical")
             else:  # cloth: both sides visible, the underside in its own colour
                 mesh.set_back_face_policy("custom")
                 mesh.set_back_face_color(colors.CLOTH_BACK_COLOR)
-            self.parts.append(_Part(mesh, "surfaces",
-                                    lambda x, m=mesh, v=vertices: m.update_vertex_positions(x[v])))
+            self.parts.append(_Part(mesh, "surfaces", lambda x, m=mesh, b=body, v=used:
+                                    m.update_vertex_positions(body_surface(b, x).vertices[v])))
 
     def _add_springs(self) -> None:
         springs = self.model.springs.astype(np.int64)
@@ -116,21 +117,10 @@ class SceneDrawing:
     def _add_terrains(self) -> None:
         for number, terrain in enumerate(self.model.terrains):
             name = f"terrain {number}: {type(terrain).__name__.lower()}"
-            if isinstance(terrain, Plane):
-                patch = _PlanePatch(name, terrain, self.positions)
-                self.parts.append(_Part(patch.mesh, "terrains", patch.follow))
-                patch.part = self.parts[-1]
-            elif isinstance(terrain, Bowl):
-                vertices, triangles = bowl_mesh(terrain.center, terrain.radius)
-                mesh = ps.register_surface_mesh(name, vertices, triangles, smooth_shade=True,
-                                                color=colors.BOWL_COLOR)
-                mesh.set_back_face_policy("cull")
-                self.parts.append(_Part(mesh, "terrains"))
-            elif isinstance(terrain, Sphere):
-                vertices, triangles = sphere_mesh(terrain.center, terrain.radius)
-                mesh = ps.register_surface_mesh(name, vertices, triangles, smooth_shade=True,
-                                                color=colors.TERRAIN_COLOR)
-                self.parts.append(_Part(mesh, "terrains"))
+            drawn = _TerrainDrawing(name, terrain, self.positions)
+            follow = drawn.follow if drawn.shape.recentre_distance is not None else None
+            self.parts.append(_Part(drawn.mesh, "terrains", follow))
+            drawn.part = self.parts[-1]
 
     # --- use ------------------------------------------------------------------------------
     def update(self, positions) -> bool:
@@ -164,35 +154,35 @@ class SceneDrawing:
         return [part.structure.get_name() for part in self.parts if part.toggle == toggle]
 
 
-class _PlanePatch:
-    """A checkered square of a plane under the bodies, moved along when they leave its middle."""
+class _TerrainDrawing:
+    """A terrain's display mesh (its kind's ``display_mesh``), rebuilt around the bodies when
+    the mesh follows them (a plane's patch) and they leave its middle."""
 
-    def __init__(self, name, plane, positions):
-        self.name, self.plane = name, plane
-        low = positions.min(axis=0)
-        high = positions.max(axis=0)
-        extent = float(np.max(high - low))
-        self.cell = float(10.0 ** np.round(np.log10(max(extent, 1e-3) / 4)))
-        self.half_size = max(40.0 * self.cell, 10.0 * extent)
+    def __init__(self, name, terrain, positions):
+        self.name, self.terrain = name, terrain
+        self.extent = float(np.max(positions.max(axis=0) - positions.min(axis=0)))
         self.part = None
         self._build(positions.mean(axis=0))
 
     def _build(self, near) -> None:
-        vertices, triangles, checker = plane_patch(self.plane.point, self.plane.unit_normal(),
-                                                   near, self.half_size, self.cell)
-        self.center = vertices.mean(axis=0)
-        self.mesh = ps.register_surface_mesh(self.name, vertices, triangles,
-                                             color=colors.TERRAIN_COLOR)
-        cell_colors = np.asarray(colors.TERRAIN_CHECKER_COLORS)[checker]
-        self.mesh.add_color_quantity("checker", cell_colors, defined_on="faces", enabled=True)
+        shape = self.terrain.display_mesh(near, self.extent)
+        color = colors.BOWL_COLOR if shape.color == "bowl" else colors.TERRAIN_COLOR
+        self.shape = shape
+        self.mesh = ps.register_surface_mesh(self.name, shape.vertices, shape.triangles,
+                                             color=color, smooth_shade=shape.smooth)
+        if shape.face_colors is not None:
+            self.mesh.add_color_quantity("checker", shape.face_colors, defined_on="faces",
+                                         enabled=True)
+        if shape.cull_back:
+            self.mesh.set_back_face_policy("cull")
+        elif shape.two_sided:
+            self.mesh.set_back_face_policy("identical")
         if self.part is not None:
             self.part.structure = self.mesh
 
     def follow(self, positions) -> None:
         near = positions.mean(axis=0)
-        offset = near - self.center
-        offset -= (offset @ self.plane.unit_normal()) * self.plane.unit_normal()
-        if np.linalg.norm(offset) > self.half_size / 3:
+        if self.shape.needs_recentring(near):
             self._build(near)
 
 

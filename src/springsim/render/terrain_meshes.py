@@ -1,12 +1,77 @@
-"""Triangle meshes of the terrains (plain NumPy): a checkered patch of a plane, a sphere, a bowl.
+"""Triangle meshes of the terrains (plain NumPy): what a terrain kind's ``display_mesh`` gives.
 
 Planes are infinite, so what is drawn is a square patch centred near the bodies; its checker
 cells are anchored to the plane's point so that the pattern stays put when the patch is moved,
 and a sliding body is seen to move over it.
 """
 import math
+from dataclasses import dataclass
 
 import numpy as np
+
+
+@dataclass
+class TerrainMesh:
+    """What is drawn of a terrain: triangles (wound to face the free side), how they are
+    coloured, and whether the mesh follows the bodies (``recentre_distance``: it is rebuilt when
+    the bodies' middle moves that far from ``center`` across ``normal``)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    face_colors: np.ndarray | None = None   # (T, 3) RGB, or one colour for all
+    color: str = "terrain"                  # "terrain" or "bowl" (render.colors)
+    cull_back: bool = False                 # hide faces seen from behind (a bowl's near wall)
+    two_sided: bool = False                 # both sides lit alike (an open mesh)
+    smooth: bool = True                     # smooth shading (curved) or flat (faceted)
+    center: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    recentre_distance: float | None = None
+
+    def needs_recentring(self, near) -> bool:
+        if self.recentre_distance is None:
+            return False
+        offset = np.asarray(near, float) - self.center
+        offset -= (offset @ self.normal) * self.normal
+        return bool(np.linalg.norm(offset) > self.recentre_distance)
+
+
+def plane_display_mesh(point, normal, near, extent: float) -> TerrainMesh:
+    """A checkered patch, with cells about a quarter of the bodies' ``extent`` (a power of 10)
+    and ten times their extent across, that moves along once they leave its middle third."""
+    from .colors import TERRAIN_CHECKER_COLORS
+
+    cell = float(10.0 ** np.round(np.log10(max(extent, 1e-3) / 4)))
+    half_size = max(40.0 * cell, 10.0 * extent)
+    vertices, triangles, checker = plane_patch(point, normal, near, half_size, cell)
+    n = np.asarray(normal, float) / np.linalg.norm(normal)
+    return TerrainMesh(vertices, triangles, np.asarray(TERRAIN_CHECKER_COLORS)[checker],
+                       smooth=False, center=vertices.mean(axis=0), normal=n, recentre_distance=half_size / 3)
+
+
+def sphere_points_near(center, radius: float, corners: np.ndarray, size: float,
+                       lower_half: bool) -> np.ndarray:
+    """Points of a sphere (its lower half for a bowl) under the box with these corners and
+    diagonal ``size``: the whole sphere when it is small, else the part under the box."""
+    center, radius = np.asarray(center, float), float(radius)
+    if radius > 2 * size:
+        offsets = corners - center
+        return center + radius * offsets / np.linalg.norm(offsets, axis=1, keepdims=True)
+    directions = sphere_directions()
+    if lower_half:
+        directions = directions[directions[:, 1] <= 0]
+    return center + radius * directions
+
+
+def sphere_directions(count: int = 400) -> np.ndarray:
+    """Nearly even unit vectors (a Fibonacci sphere), with the equator itself."""
+    k = np.arange(count) + 0.5
+    y = 1 - 2 * k / count
+    phi = math.pi * (3 - math.sqrt(5)) * k
+    ring = np.sqrt(1 - y * y)
+    spiral = np.stack([ring * np.cos(phi), y, ring * np.sin(phi)], axis=1)
+    angles = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+    equator = np.stack([np.cos(angles), np.zeros_like(angles), np.sin(angles)], axis=1)
+    return np.concatenate([spiral, equator])
 
 
 def plane_basis(normal) -> tuple[np.ndarray, np.ndarray]:

@@ -20,14 +20,16 @@ from ..scene import Scene
 from ..scenefile import load_scene
 from ..simulation import Simulation
 from ..springs import SpringKind, SpringParameters
-from ..terrains import Bowl, Plane, Sphere, tilted_plane
+from ..terrains import TERRAIN_TYPES
 from .frame_stats import FrameStats
 from .mouse_spring import MouseSpring
 
 UNSTABLE_MESSAGE = "System Unstable! Please reset the parameters!"
-# The course framework's terrain buttons, plus none (the cloth scenes have no terrain).
-TERRAINS = {"plane": Plane, "tilted plane": tilted_plane, "sphere": Sphere, "bowl": Bowl,
-            "none": None}
+# The terrain buttons: every kind that names one (``menu_name``: the course framework's plane,
+# tilted plane, sphere and bowl; a mesh terrain needs a file, so it has none), plus none (the
+# cloth scenes have no terrain).
+TERRAINS = {**{factory().menu_name(): factory for factory in TERRAIN_TYPES.values()
+               if hasattr(factory(), "menu_name")}, "none": None}
 
 
 class Controls:
@@ -82,9 +84,7 @@ class Controls:
         if not terrains:
             return "none"
         terrain = terrains[0]
-        if isinstance(terrain, Plane):
-            return "plane" if terrain.unit_normal()[1] > 0.999 else "tilted plane"
-        return "bowl" if isinstance(terrain, Bowl) else "sphere"
+        return terrain.menu_name() if hasattr(terrain, "menu_name") else type(terrain).__name__
 
     # --- settings that keep the state -----------------------------------------------------
     def set_integrator(self, name: str) -> bool:

@@ -1,0 +1,64 @@
+"""``terrain_distance``: the one function the contact kernels call, generated from the registry.
+
+The package docstring says why it is generated. The source it compiles reads, for two kinds::
+
+    def terrain_distance(model, t, x0, x1, x2, particle_radius):
+        kind = model.terrain_kind[t]
+        row = model.terrain_parameters[t]
+        if kind == 0:
+            phi, nx, ny, nz = kernel_0(row, model.terrain_data, x0, x1, x2)
+        else:
+            phi, nx, ny, nz = kernel_1(row, model.terrain_data, x0, x1, x2)
+        return phi - particle_radius, nx, ny, nz
+"""
+import linecache
+
+from numba import njit
+
+from .._jit import FASTMATH_FLAGS
+from .base import KINDS
+
+FILENAME = "<springsim.terrains.dispatch: generated>"
+
+
+def dispatcher_source(count: int) -> str:
+    lines = ["def terrain_distance(kind, row, data, x0, x1, x2, particle_radius):",
+             '    """Signed distance (m) from a particle\'s surface to a terrain, and the',
+             '    terrain\'s unit normal there."""']
+    call = "phi, nx, ny, nz = kernel_{}(row, data, x0, x1, x2)"
+    for number in range(count):
+        if count == 1:
+            lines.append("    " + call.format(number))
+            break
+        if number == 0:
+            lines.append(f"    if kind == {number}:")
+        elif number < count - 1:
+            lines.append(f"    elif kind == {number}:")
+        else:
+            lines.append("    else:")
+        lines.append("        " + call.format(number))
+    lines.append("    return phi - particle_radius, nx, ny, nz")
+    return "\n".join(lines) + "\n"
+
+
+def inlined(dispatcher):
+    return njit(fastmath=FASTMATH_FLAGS, error_model="numpy", inline="always")(
+        dispatcher.py_func)
+
+
+def build_dispatcher(kinds):
+    source = dispatcher_source(len(kinds))
+    # Every kind's kernel is inlined into the dispatcher, and the dispatcher into its callers, at
+    # Numba's level (inline="always"): then no call is left in the contact loops, and Numba drops
+    # the reference counting of the row it passes; a call left in any branch (the mesh kernel is
+    # too big for LLVM to inline) kept it, and made the plane's contact four times slower.
+    namespace = {f"kernel_{number}": inlined(cls.distance_kernel)
+                 for number, cls in enumerate(kinds)}
+    # registered with linecache so that tracebacks and Numba's error messages can show it
+    linecache.cache[FILENAME] = (len(source), None, source.splitlines(True), FILENAME)
+    exec(compile(source, FILENAME, "exec"), namespace)
+    return njit(fastmath=FASTMATH_FLAGS, error_model="numpy", inline="always")(
+        namespace["terrain_distance"])
+
+
+terrain_distance = build_dispatcher(KINDS)

@@ -1,0 +1,67 @@
+"""A solid sphere; particles collide with its outside: ``phi = |x - c| - R``, normal
+``(x - c)/|x - c|``."""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._jit import kernel
+from ..errors import is_finite, require
+from .base import Contact, register
+
+
+@kernel
+def outward(row, x0, x1, x2):
+    """Distance from the centre (row 0-2) and the unit vector away from it."""
+    dx, dy, dz = x0 - row[0], x1 - row[1], x2 - row[2]
+    r = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if r == 0.0:
+        return r, 0.0, 1.0, 0.0   # at the very centre any direction will do
+    return r, dx / r, dy / r, dz / r
+
+
+@kernel
+def sphere_distance(row, data, x0, x1, x2):
+    """row: the centre (0-2) and the radius (3)."""
+    r, nx, ny, nz = outward(row, x0, x1, x2)
+    return r - row[3], nx, ny, nz
+
+
+@dataclass
+class Sphere(Contact):
+    """A solid sphere; particles collide with its outside. Mass kept for the reference, unused."""
+
+    center: tuple = (0.0, -1.0, 0.0)
+    radius: float = 3.0
+    mass: float = 10.0
+
+    distance_kernel = sphere_distance
+
+    def validate(self, key: str) -> None:
+        self.validate_contact(key)
+        require(np.shape(self.center) == (3,) and is_finite(self.center), f"{key}.center",
+                self.center, "must be three finite numbers (m)")
+        require(is_finite(self.radius) and self.radius > 0, f"{key}.radius", self.radius,
+                "must be > 0 m")
+
+    def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
+        return np.linalg.norm(x - np.asarray(self.center, float), axis=-1) - self.radius - radius
+
+    def pack(self, data_start: int):
+        return [*np.asarray(self.center, float), float(self.radius)], np.empty(0)
+
+    def display_mesh(self, near, extent: float):
+        from ..render.terrain_meshes import TerrainMesh, sphere_mesh
+
+        return TerrainMesh(*sphere_mesh(self.center, self.radius))
+
+    def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
+        from ..render.terrain_meshes import sphere_points_near
+
+        return sphere_points_near(self.center, self.radius, corners, size, lower_half=False)
+
+    def menu_name(self) -> str:
+        return "sphere"
+
+
+register(Sphere, {"sphere": Sphere}, order=1)
