@@ -20,6 +20,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--video", metavar="PATH",
                         help="also render the frames as a video (.mp4, .gif, or a folder for "
                              "PNG frames) with springsim.render")
+    parser.add_argument("--export", action="append", default=[], metavar="PATH",
+                        help="also export the frames: .usd/.usda/.usdc, .mdd or .pc2 (with a "
+                             "rest-pose .obj), .obj (repeatable; see `springsim export`)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar and no summary (errors are still shown)")
 
@@ -48,6 +51,7 @@ def scene_from_arguments(args):
 
 
 def run(args) -> int:
+    from ..export import check_exports, export_recording
     from ..plots import plot_energy, plot_format
     from ..recording import record, write_npz
     from ..simulation import Simulation
@@ -64,11 +68,13 @@ def run(args) -> int:
     if args.video:
         from ..render.video import output_format
         output_format(args.video, key="--video")
+    check_exports(args.export, key="--export")
 
     simulation = Simulation(scene)
     recording = record(simulation, scene.duration, args.fps, progress=not args.quiet)
     write_npz(out, recording.arrays())
     written = [out]
+    written += export_recording(recording, args.export, key="--export")
     if args.plot:
         plot_energy(recording, args.plot)
         written.append(args.plot)
