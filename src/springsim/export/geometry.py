@@ -8,7 +8,7 @@ which covers a cube's or cloth's surface (one particle, weight 1), a mesh body's
 (eight particles, trilinear weights) and a ball's sphere (the centre particle plus radius times a
 unit direction), so that one line computes any piece at every frame.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,9 +42,23 @@ class Piece:
         return vertices + self.offsets if np.any(self.offsets) else vertices
 
 
-def body_pieces(layout) -> list[Piece]:
-    """One piece per body with surface triangles (balls and bare particle sets have none)."""
-    return [body_piece(body) for body in layout.bodies if len(body.surface)]
+def body_pieces(layout, first_positions) -> list[Piece]:
+    """One piece per body with surface triangles (balls and bare particle sets have none); a
+    closed surface is wound to face outwards at ``first_positions`` (P, 3), as USD, Blender and
+    browsers expect of a front face (counter-clockwise seen from outside)."""
+    pieces = [body_piece(body) for body in layout.bodies if len(body.surface)]
+    return [facing_outwards(piece, first_positions) for piece in pieces]
+
+
+def facing_outwards(piece: Piece, positions) -> Piece:
+    """``piece`` with its triangles reversed if they enclose a negative volume (face inwards)."""
+    if not piece.closed:
+        return piece
+    x = piece.vertices(positions)
+    a, b, c = (x[piece.triangles[:, k]] for k in range(3))
+    if np.einsum("ij,ij->", a, np.cross(b, c)) >= 0:     # 6 x the enclosed volume
+        return piece
+    return replace(piece, triangles=np.ascontiguousarray(piece.triangles[:, ::-1]))
 
 
 def body_piece(body) -> Piece:
@@ -73,10 +87,10 @@ def ball_pieces(layout) -> list[Piece]:
     return pieces
 
 
-def point_pieces(layout) -> list[Piece]:
+def point_pieces(layout, first_positions) -> list[Piece]:
     """Everything that moves, as meshes: the body surfaces, then a sphere per ball (the order of
     a point cache's points and of its rest mesh's vertices)."""
-    return body_pieces(layout) + ball_pieces(layout)
+    return body_pieces(layout, first_positions) + ball_pieces(layout)
 
 
 def stacked_vertices(pieces, positions: np.ndarray) -> np.ndarray:

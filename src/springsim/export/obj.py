@@ -25,7 +25,7 @@ def check_available() -> None:
 
 
 def write(take, path) -> list:
-    pieces = point_pieces(take.layout)
+    pieces = point_pieces(take.layout, take.positions[0])
     with staged_path(path) as staged:
         write_obj(staged, pieces, stacked_vertices(pieces, take.positions[:1])[0], take.name)
     return [path]

@@ -57,7 +57,7 @@ def _bodies(stage, take) -> None:
     from pxr import Gf, UsdGeom, Vt
 
     UsdGeom.Scope.Define(stage, "/take/bodies")
-    pieces = body_pieces(take.layout)
+    pieces = body_pieces(take.layout, take.positions[0])
     names = unique_names(_identifier(piece.name) for piece in pieces)
     for number, (piece, name) in enumerate(zip(pieces, names)):
         mesh = _static_mesh(stage, f"/take/bodies/{name}", piece.triangles,
