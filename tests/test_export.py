@@ -153,7 +153,8 @@ def test_mdd_and_pc2_unpack_by_their_specifications_to_the_recorded_points(recor
         balls = simulation.model.arrays.balls
         per_ball = (count - len(surface)) // len(balls)
         for number, particle in enumerate(balls):
-            sphere = cache[:, len(surface) + number * per_ball:len(surface) + (number + 1) * per_ball]
+            first = len(surface) + number * per_ball
+            sphere = cache[:, first:first + per_ball]
             offset = np.linalg.norm(sphere - recording.positions[:, particle, None], axis=-1)
             np.testing.assert_allclose(offset, simulation.model.arrays.radius[particle], rtol=1e-5)
 
@@ -274,3 +275,16 @@ class _Model:
 
 def _embedded_model():
     return _Model()
+
+
+def test_a_loaded_recording_keeps_its_layout_and_writes_it_again(recorded, tmp_path):
+    from springsim.recording import Recording
+
+    _, recording, path = recorded
+    loaded = Recording.load(path)
+    assert set(loaded.layout) == set(LAYOUT_KEYS)
+    write_npz(tmp_path / "again.npz", loaded.arrays())
+    with np.load(tmp_path / "again.npz") as again, np.load(path) as first:
+        assert sorted(again.files) == sorted(first.files)
+        for key in LAYOUT_KEYS:
+            np.testing.assert_array_equal(again[key], first[key])

@@ -80,7 +80,8 @@ class Recording:
 
     def arrays(self) -> dict:
         """Everything, as the arrays an NPZ file holds (strings and numbers as 0-d arrays)."""
-        plain = {f.name: np.asarray(getattr(self, f.name)) for f in fields(self) if f.name != "layout"}
+        plain = {f.name: np.asarray(getattr(self, f.name)) for f in fields(self)
+                 if f.name != "layout"}
         return {**plain, **self.layout}
 
     @classmethod

@@ -15,8 +15,8 @@ from .take import Take, load_take, take_from_arrays
 
 FORMAT_MODULES = ("usd", "mdd", "pc2", "obj")
 
-__all__ = ["Take", "check_exports", "check_target", "export", "export_recording", "exporter_for", "extensions", "load_take",
-           "take_from_arrays"]
+__all__ = ["Take", "check_exports", "check_target", "export", "export_recording", "exporter_for",
+           "extensions", "load_take", "take_from_arrays"]
 
 
 def _modules():

@@ -1,4 +1,4 @@
-"""What the point-cache formats (MDD, PC2) share: the points they hold and the rest mesh beside them.
+"""What the point-cache formats (MDD, PC2) share: their points and the rest mesh beside them.
 
 A point cache is only positions, point by point and frame by frame; the mesh it moves comes from
 a rest-pose OBJ written beside it (``take.mdd`` -> ``take.obj``) whose vertices are the cache's
