@@ -16,25 +16,15 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
-from springsim import Simulation, load_scene
 from springsim.export import load_take
 from springsim.export.geometry import body_pieces
-from springsim.recording import record, write_npz
+from test_replay import take_path  # noqa: F401  (the same recording: jelly-balls, 1 s at 20 fps)
 
 
 def free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         return probe.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def take_path(tmp_path_factory):
-    simulation = Simulation(load_scene("jelly-balls", ["bodies.0.particles_per_edge=4"]))
-    recording = record(simulation, 1.0, 20.0)
-    path = tmp_path_factory.mktemp("web") / "take.npz"
-    write_npz(path, recording.arrays())
-    return path
 
 
 def test_the_server_holds_the_recorded_positions_of_the_frame_shown(take_path):

@@ -10,18 +10,13 @@ MOD_meshcache_mdd.cc and writes it in its io_shape_mdd add-on, export_mdd.py):
 """
 import numpy as np
 
-from .point_cache import rest_mesh_path, write_with_rest_mesh
+from .point_cache import check_available, outputs, write_with_rest_mesh
 
 EXTENSIONS = (".mdd",)
 DESCRIPTION = "MDD point cache (big-endian) + rest-pose OBJ, for Blender's Mesh Cache / Houdini"
 
 
-def outputs(path) -> list:
-    return [path, rest_mesh_path(path)]
-
-
-def check_available() -> None:
-    """No dependency."""
+__all__ = ["EXTENSIONS", "DESCRIPTION", "check_available", "outputs", "write", "encode"]
 
 
 def write(take, path) -> list:

@@ -12,7 +12,7 @@ The start frame is 0 and the sample rate 1: sample k is frame k of the recording
 """
 import numpy as np
 
-from .point_cache import rest_mesh_path, write_with_rest_mesh
+from .point_cache import check_available, outputs, write_with_rest_mesh
 
 EXTENSIONS = (".pc2",)
 DESCRIPTION = "PC2 point cache (little-endian) + rest-pose OBJ, for Blender's Mesh Cache / Houdini"
@@ -20,12 +20,7 @@ HEADER = np.dtype([("signature", "S12"), ("version", "<i4"), ("points", "<i4"),
                    ("start", "<f4"), ("rate", "<f4"), ("samples", "<i4")])
 
 
-def outputs(path) -> list:
-    return [path, rest_mesh_path(path)]
-
-
-def check_available() -> None:
-    """No dependency."""
+__all__ = ["EXTENSIONS", "DESCRIPTION", "check_available", "outputs", "write", "encode"]
 
 
 def write(take, path) -> list:

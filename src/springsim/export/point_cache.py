@@ -16,6 +16,15 @@ from .obj import write_obj
 from .staging import staged_paths
 
 
+def outputs(path) -> list:
+    """A cache and its rest mesh."""
+    return [path, rest_mesh_path(path)]
+
+
+def check_available() -> None:
+    """No dependency: NumPy writes both formats."""
+
+
 def rest_mesh_path(path) -> Path:
     return Path(path).with_suffix(".obj")
 

@@ -5,7 +5,7 @@ import numpy as np
 import polyscope as ps
 import polyscope.imgui as psim
 
-from ..render.backend import start_renderer
+from ..render.backend import show_frames, start_renderer
 from ..render.camera import VIEWS, apply_camera, frame_points, scene_points
 from ..render.drawing import DrawOptions, SceneDrawing
 from ..viewer.panel import WIDTH as PANEL_WIDTH, draw_toggles
@@ -38,13 +38,7 @@ class ReplayViewer:
         self.drawing.update(self.take.positions[self.timeline.frame])
 
     def run(self, frames: int | None = None) -> None:
-        if self.headless:
-            for _ in range(frames or 1):
-                ps.frame_tick()
-        elif frames is None:
-            ps.show()
-        else:
-            ps.show(frames)
+        show_frames(self.headless, frames)
 
     def look(self, view: str) -> None:
         """Frame the whole recorded motion from one of the named directions."""
