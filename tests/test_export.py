@@ -18,6 +18,7 @@ from pxr import Usd, UsdGeom
 
 from springsim import Simulation, load_scene
 from springsim.cli import main
+from springsim.errors import SceneError
 from springsim.export import export, extensions, load_take, take_from_arrays
 from springsim.export import mdd as mdd_format
 from springsim.model import BodySlice
@@ -288,3 +289,13 @@ def test_a_loaded_recording_keeps_its_layout_and_writes_it_again(recorded, tmp_p
         assert sorted(again.files) == sorted(first.files)
         for key in LAYOUT_KEYS:
             np.testing.assert_array_equal(again[key], first[key])
+
+
+def test_an_export_too_large_for_memory_is_refused_before_writing(recorded, tmp_path,
+                                                                  monkeypatch):
+    take = load_take(recorded[2])
+    pages = os.sysconf("SC_PHYS_PAGES")
+    monkeypatch.setattr(os, "sysconf", lambda name: 1 if name == "SC_PHYS_PAGES" else 4096)
+    with pytest.raises(SceneError, match="needs .* GB of the machine's"):
+        export(take, tmp_path / "take.usd")
+    assert os.listdir(tmp_path) == [] and pages > 1

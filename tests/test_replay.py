@@ -118,6 +118,22 @@ def test_toggles_and_the_energy_plot(replay):
     replay.run(frames=3)       # the panel builds with the plot and every control
 
 
+def test_a_recording_from_before_the_layout_replays_its_surface(take_path, tmp_path):
+    from springsim.recording_layout import LAYOUT_KEYS
+    from springsim.replay.window import ReplayViewer
+
+    with np.load(take_path) as data:
+        old = {key: data[key] for key in data.files if key not in LAYOUT_KEYS}
+    np.savez(tmp_path / "old.npz", **old)
+    viewer = ReplayViewer(load_take(tmp_path / "old.npz"), headless=True, width=WIDTH,
+                          height=HEIGHT)
+    viewer.timeline.seek(5)
+    viewer.run(frames=1)
+    np.testing.assert_array_equal(viewer.drawing.positions, old["positions"][5])
+    assert ps.has_surface_mesh("surface 0: jelly-balls")
+    ps.clear_user_callback()
+
+
 def test_play_refuses_a_bad_speed_and_a_missing_file(take_path, capsys, tmp_path):
     assert main(["play", str(take_path), "--speed", "0"]) == 2
     assert main(["play", str(tmp_path / "none.npz")]) == 2

@@ -10,6 +10,7 @@ import importlib
 import os
 
 from ..errors import require
+from .geometry import point_pieces
 from .staging import check_output_path
 from .take import Take, load_take, take_from_arrays
 
@@ -62,4 +63,21 @@ def export_recording(recording, paths, key: str = "export") -> list[str]:
 
 def export(take: Take, path, key: str = "export") -> list:
     """Write ``take`` to ``path`` in the format its extension names; the paths written."""
-    return check_target(path, key).write(take, path)
+    module = check_target(path, key)
+    check_memory(take, key, path)
+    return module.write(take, path)
+
+
+def check_memory(take: Take, key: str, path) -> None:
+    """Refuse up front an export whose vertices at every frame (float64 and a float32 copy)
+    would not fit in half the machine's memory."""
+    vertices = sum(piece.vertex_count for piece in point_pieces(take.layout, take.positions[0]))
+    needed = take.frame_count * vertices * 3 * (8 + 4)
+    try:
+        available = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return   # no way to tell on this system
+    require(needed <= available / 2, key, os.fspath(path),
+            f"exporting {take.frame_count} frames of {vertices} vertices needs "
+            f"{needed / 1e9:.1f} GB of the machine's {available / 1e9:.1f} GB; record fewer "
+            "frames (--fps, --duration)")
