@@ -176,7 +176,8 @@ def test_a_recording_from_before_the_layout_still_exports_its_surface(recorded, 
 @pytest.mark.parametrize("case, message", [
     ("not_npz", "is not an NPZ file"), ("other_npz", "is not a springsim recording"),
     ("missing", "no such file"), ("extension", "must end in one of .usd, .usda, .usdc"),
-    ("folder", "does not exist"), ("target_is_folder", "is a folder")])
+    ("folder", "does not exist"), ("target_is_folder", "is a folder"),
+    ("damaged", "has a damaged layout"), ("inconsistent", "numbers particles up to")])
 def test_bad_input_is_one_line_and_exit_2_and_writes_nothing(recorded, tmp_path, capsys, case,
                                                             message):
     recording, out = recorded[2], tmp_path / "take.usd"
@@ -186,6 +187,15 @@ def test_bad_input_is_one_line_and_exit_2_and_writes_nothing(recorded, tmp_path,
     elif case == "other_npz":
         recording = tmp_path / "other.npz"
         np.savez(recording, weights=np.ones(3))
+    elif case in ("damaged", "inconsistent"):
+        with np.load(recording) as data:
+            arrays = dict(data)
+        if case == "damaged":
+            arrays["body_surface_rows"] = arrays["body_surface_rows"][:1]
+        else:
+            arrays["ball_particles"] = arrays["ball_particles"] + 1000
+        recording = tmp_path / f"{case}.npz"
+        np.savez(recording, **arrays)
     elif case == "missing":
         recording = tmp_path / "nowhere.npz"
     elif case == "extension":

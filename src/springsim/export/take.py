@@ -49,7 +49,11 @@ def take_from_arrays(arrays: dict, name: str | None = None, key: str = "recordin
     require(bool(np.all(np.isfinite(positions))), key, name,
             "holds non-finite positions (a diverged run?); nothing to export")
     scene = str(arrays["scene"]) if "scene" in arrays else (name or "take")
-    layout = read_layout(arrays, scene)
+    try:
+        layout = read_layout(arrays, scene)
+    except (KeyError, IndexError, ValueError, TypeError) as error:
+        raise SceneError(key, name, f"has a damaged layout ({type(error).__name__}: {error}); "
+                         "record it again") from None
     _check_layout(layout, positions.shape[1], key, name)
     return Take(scene, time, fps, positions, layout, arrays)
 
@@ -72,6 +76,12 @@ def _check_layout(layout: Layout, particles: int, key: str, name) -> None:
     """Every particle number the layout holds must lie within the recorded particles."""
     numbers = [layout.ball_particles]
     for body in layout.bodies:
+        if body.embedding is not None:
+            surface = np.asarray(body.surface)
+            require(surface.size == 0 or (surface.min() >= 0
+                                          and surface.max() < len(body.embedding.particles)),
+                    key, name, f"is not a consistent springsim recording: body {body.name!r} "
+                    "numbers embedded vertices it does not have")
         numbers.append(np.asarray([body.start, body.stop - 1]) if body.stop > body.start
                        else np.empty(0, np.int64))
         numbers.append(np.asarray(body.embedding.particles if body.embedding is not None
