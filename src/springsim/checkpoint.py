@@ -28,7 +28,7 @@ VERSION = 1
 # The run options a checkpoint keeps: those that decide what is simulated and recorded, and where
 # it goes (``springsim run``'s argument names).
 RUN_OPTIONS = ("scene", "set", "integrator", "dt", "duration", "fps", "out", "plot", "video",
-               "checkpoint_every")
+               "export", "checkpoint_every")
 SCENE_OPTIONS = ("scene", "set", "integrator", "dt", "duration", "fps")
 
 
@@ -181,6 +181,8 @@ class Resumed:
         recording = Recording.empty(simulation, frame_count, self.arguments["fps"])
         per_frame = frame_fields(simulation, recording.fps)
         for name in recording.arrays():
+            if not hasattr(recording, name):
+                continue   # the layout (recording_layout.py), made again from the model
             saved = self.arrays.get(f"recording.{name}")
             require(saved is not None, "--resume", self.path, f"has no recording.{name}")
             if name in per_frame:
@@ -214,8 +216,8 @@ def open_checkpoint(args) -> Resumed:
         raise SceneError("--resume", args.resume, f"holds no readable run ({error})") from None
     scene.validate()
     for name in RUN_OPTIONS:
-        if name in SCENE_OPTIONS or getattr(args, name, None) is None:
-            setattr(args, name, arguments.get(name))
+        if name in SCENE_OPTIONS or getattr(args, name, None) in (None, []):
+            setattr(args, name, arguments.get(name, getattr(args, name, None)))
     return Resumed(args.resume, scene, arguments, arrays, frames)
 
 

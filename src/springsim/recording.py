@@ -5,11 +5,12 @@ compiled call per frame, and ``time`` holds the exact simulated time of each fra
 """
 import sys
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from .energy import gravitational_energy, kinetic_energy, spring_energy
+from .recording_layout import LAYOUT_KEYS, layout_arrays
 from .safe_files import atomic_output
 from .sampling import frame_steps
 
@@ -35,6 +36,7 @@ class Recording:
     steps: int = 0                     # steps taken while recording
     step_seconds: float = 0.0          # wall time spent in the integrator
     wall_seconds: float = 0.0          # wall time of the whole recording loop
+    layout: dict = field(default_factory=dict)  # bodies, balls, terrains (recording_layout.py)
 
     @classmethod
     def empty(cls, simulation, frame_count: int, fps: float) -> "Recording":
@@ -48,7 +50,7 @@ class Recording:
             kinetic_energy=np.zeros(frame_count), gravitational_energy=np.zeros(frame_count),
             spring_energy=np.zeros(frame_count), penetration=np.zeros(frame_count),
             springs=np.asarray(model.springs), spring_kind=np.asarray(model.spring_kind),
-            mass=np.asarray(model.mass), surface=all_surfaces(model))
+            mass=np.asarray(model.mass), surface=all_surfaces(model), layout=layout_arrays(model))
 
     @property
     def frame_count(self) -> int:
@@ -70,12 +72,15 @@ class Recording:
 
     def arrays(self) -> dict:
         """Everything, as the arrays an NPZ file holds (strings and numbers as 0-d arrays)."""
-        return {field.name: np.asarray(getattr(self, field.name)) for field in fields(self)}
+        plain = {f.name: np.asarray(getattr(self, f.name)) for f in fields(self)
+                 if f.name != "layout"}
+        return {**plain, **self.layout}
 
     @classmethod
     def load(cls, path) -> "Recording":
         with np.load(path) as data:
-            values = {field.name: data[field.name] for field in fields(cls)}
+            values = {f.name: data[f.name] for f in fields(cls) if f.name != "layout"}
+            values["layout"] = {key: data[key] for key in LAYOUT_KEYS if key in data}
         for name in ("scene", "integrator"):
             values[name] = str(values[name])
         for name in ("dt", "fps", "step_seconds", "wall_seconds"):

@@ -117,6 +117,14 @@ def staged_path(path, *, folder: bool = False):
 
 
 @contextlib.contextmanager
+def staged_paths(paths):
+    """``staged_path`` for several files that belong together (a point cache and its rest mesh):
+    none is renamed onto its target unless every one of them was written."""
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(staged_path(path)) for path in paths]
+
+
+@contextlib.contextmanager
 def atomic_output(path):
     """A binary file object that becomes ``path`` only if the block finishes without an error."""
     with staged_path(path) as staged:

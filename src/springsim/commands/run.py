@@ -23,6 +23,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--video", metavar="PATH",
                         help="also render the frames as a video (.mp4, .gif, or a folder for "
                              "PNG frames) with springsim.render")
+    parser.add_argument("--export", action="append", default=[], metavar="PATH",
+                        help="also export the frames: .usd/.usda/.usdc, .mdd or .pc2 (with a "
+                             "rest-pose .obj), .obj (repeatable; see `springsim export`)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar and no summary (errors are still shown)")
     parser.add_argument("--checkpoint-every", type=float, metavar="SECONDS",
@@ -66,6 +69,7 @@ def scene_from_arguments(args):
 def run(args) -> int:
     from ..checkpoint import check_interval, open_checkpoint, record_run
     from ..errors import require
+    from ..export import check_exports, export_recording
     from ..plots import plot_energy, plot_format
     from ..recording import write_npz
     from ..safe_files import check_output_path
@@ -92,12 +96,14 @@ def run(args) -> int:
         from ..render.video import output_format
         check_output_path("--video", args.video,
                           folder=output_format(args.video, key="--video") == "png folder")
+    check_exports(args.export, key="--export")
     plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
 
     simulation = Simulation(scene, threads=args.threads)
     recording = record_run(simulation, args, out, resumed)   # record, with checkpoints
     write_npz(out, recording.arrays())
     written = [out]
+    written += export_recording(recording, args.export, key="--export")
     if args.plot:
         plot_energy(recording, args.plot)
         written.append(args.plot)

@@ -46,6 +46,18 @@ def start_renderer(*, headless: bool, width: int, height: int) -> str:
     return ps.get_render_engine_backend_name()
 
 
+def show_frames(headless: bool, frames: int | None = None) -> None:
+    """Run polyscope's frame loop: until the window is closed, or for ``frames`` frames (one at
+    least when headless, where there is no window to close)."""
+    if headless:
+        for _ in range(frames or 1):
+            ps.frame_tick()
+    elif frames is None:
+        ps.show()
+    else:
+        ps.show(frames)
+
+
 def _configure_scene() -> None:
     ps.set_up_dir("y_up")
     ps.set_front_dir("z_front")

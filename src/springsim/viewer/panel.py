@@ -138,18 +138,9 @@ class Panel:
             self._integer("particles per edge", count, c.set_particles_per_edge, 2, 40)
 
     def _drawing(self) -> None:
-        c = self.controls
-        if not psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
-            return
-        present = {SpringKind(k).label for k in set(c.sim.model.spring_kind.tolist())}
-        toggles = ["particles", *[k.label for k in SpringKind if k.label in present],
-                   "surfaces", "balls", "terrains"]
-        for number, name in enumerate(toggles):
-            if number % 3:
-                psim.SameLine()
-            changed, shown = psim.Checkbox(name, getattr(c.draw, name))
-            if changed:
-                self.viewer.set_drawn(name, shown)
+        if psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
+            draw_toggles(self.controls.draw, self.controls.sim.model.spring_kind,
+                         self.viewer.set_drawn)
 
     def _view_and_mouse(self) -> None:
         c, viewer = self.controls, self.viewer
@@ -213,3 +204,17 @@ class Panel:
             apply(self._pending.pop(label))
         elif not psim.IsItemActive():
             self._pending.pop(label, None)
+
+
+def draw_toggles(draw, spring_kinds, set_drawn) -> None:
+    """A checkbox per part the model has (``draw``: render.DrawOptions); ``set_drawn(name, shown)``
+    applies a change. Shared by the viewer and the replay (springsim play)."""
+    present = {SpringKind(k).label for k in set(spring_kinds.tolist())}
+    toggles = ["particles", *[k.label for k in SpringKind if k.label in present],
+               "surfaces", "balls", "terrains"]
+    for number, name in enumerate(toggles):
+        if number % 3:
+            psim.SameLine()
+        changed, shown = psim.Checkbox(name, getattr(draw, name))
+        if changed:
+            set_drawn(name, shown)

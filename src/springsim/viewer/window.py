@@ -7,7 +7,7 @@ import numpy as np
 import polyscope as ps
 import polyscope.imgui as psim
 
-from ..render.backend import capture, start_renderer
+from ..render.backend import capture, show_frames, start_renderer
 from ..render.camera import VIEWS, apply_camera, frame_points, scene_points
 from ..render.drawing import SceneDrawing
 from .mouse_spring import nearest_particle, point_on_drag_plane
@@ -57,13 +57,7 @@ class Viewer:
 
     def run(self, frames: int | None = None) -> None:
         """Show the window until it is closed, or for ``frames`` frames."""
-        if self.headless:
-            for _ in range(frames or 1):
-                ps.frame_tick()
-        elif frames is None:
-            ps.show()
-        else:
-            ps.show(frames)
+        show_frames(self.headless, frames)
 
     def close(self):
         """Finish a recording still under way; the path it was written to, if any."""
