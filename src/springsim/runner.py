@@ -13,8 +13,10 @@ concurrent.futures:
   memory, a crash in compiled code), the pool breaks and every pending task fails with it. Dask's
   nanny starts a new worker and the scheduler gives the lost task to another worker; a task whose
   workers keep dying ends with ``KilledWorker``, which ``map`` reports as that task's error
-  (``WorkerLost``). Locally a task is retried once (ALLOWED_FAILURES); a cluster keeps its own
-  ``distributed.scheduler.allowed-failures`` setting (Dask's default retries three times);
+  (``WorkerLost``). Locally each worker holds one task at a time and a task is retried once
+  (LOCAL_SCHEDULER); a cluster keeps its own ``distributed.scheduler.allowed-failures`` (Dask's
+  default retries three times, and also counts against a task queued behind the one that
+  killed the worker);
 - streaming: ``as_completed`` yields results in the order they finish, so a caller can save each
   one at once and a killed parent keeps what was done;
 - one code path: the local pool is a Dask cluster too, so the code that runs on a laptop is the
@@ -38,6 +40,10 @@ from .errors import SceneError, SimulationDiverged, require
 
 ALLOWED_FAILURES = 1        # worker deaths a task may cause on a local cluster and still be retried
 CONNECT_TIMEOUT = "10s"     # to reach a remote scheduler
+# A local worker holds one task at a time (saturation 1.0: none queued behind the running one),
+# so a worker that dies is blamed on its own run only.
+LOCAL_SCHEDULER = {"distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+                   "distributed.scheduler.worker-saturation": 1.0}
 
 
 class WorkerLost(RuntimeError):
@@ -96,10 +102,10 @@ class Runner:
             if self.address:
                 self.client = self._stack.enter_context(_connect(Client, self.address))
             else:
-                with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+                with dask.config.set(LOCAL_SCHEDULER):
                     cluster = self._stack.enter_context(LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=logging.ERROR))
+                        dashboard_address=None, silence_logs=logging.CRITICAL))
                 self.client = self._stack.enter_context(Client(cluster))
             self._stack = self._stack.pop_all()
         return self

@@ -31,11 +31,13 @@ def columns(varied_keys, seeds: bool, save: bool) -> list[str]:
 
 
 def row_of(spec, outcome: dict, npz: str | None) -> dict:
-    """The table row of ``spec`` and the dict its run returned."""
+    """The table row of ``spec`` and the dict its run returned, in column order (results a run
+    did not reach are None)."""
     row = {"run": spec.index, "run_id": spec.run_id, **dict(spec.settings)}
     if spec.seed is not None:
         row["seed"] = spec.seed
-    row.update({key: value for key, value in outcome.items() if not key.startswith("_")})
+    for column in ("status", "message", *RESULTS, *TIMINGS):
+        row[column] = outcome.get(column)
     if spec.save:
         row["npz"] = npz or ""
     return row
