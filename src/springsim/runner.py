@@ -83,14 +83,18 @@ def check_workers(workers) -> int:
 
 
 class Runner:
-    """A pool of worker processes: a local Dask cluster, or a remote one at ``address``.
+    """A pool of worker processes: a local Dask cluster of ``workers`` processes (default: every
+    core, at most ``tasks``), or the remote one whose scheduler is at ``address``.
 
     Use it as a context manager; the local cluster is shut down when the block ends.
     """
 
-    def __init__(self, workers: int | None = None, address: str | None = None):
+    def __init__(self, workers: int | None = None, address: str | None = None,
+                 tasks: int | None = None):
         self.address = scheduler_address(address)
         self.workers = check_workers(workers)
+        if tasks is not None:   # no idle local workers
+            self.workers = max(1, min(self.workers, tasks))
         self._stack = contextlib.ExitStack()
         self.client = None
 
@@ -124,6 +128,19 @@ class Runner:
                 yield _outcome(futures[future], future)
         finally:
             self.client.cancel(list(futures))
+
+    def results(self, function, items, on_result=None) -> list:
+        """``[function(item) for item in items]``, computed by the workers; ``on_result(index,
+        value)`` is called as each finishes. The first error is raised (the rest cancelled)."""
+        items = list(items)
+        values = [None] * len(items)
+        for outcome in self.map(function, items):
+            if outcome.error is not None:
+                raise outcome.error
+            values[outcome.index] = outcome.value
+            if on_result is not None:
+                on_result(outcome.index, outcome.value)
+        return values
 
 
 def _outcome(index: int, future) -> Outcome:

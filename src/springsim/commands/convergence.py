@@ -1,5 +1,8 @@
 """`springsim convergence`: the measured order of accuracy of each integrator."""
+import sys
 import time
+
+from ._workers import add_worker_arguments
 
 NAME = "convergence"
 HELP = ("measured order of accuracy of each integrator against SciPy's DOP853 on a squeezed "
@@ -13,12 +16,14 @@ def add_arguments(parser) -> None:
                         help="time at which the error is measured (default: 0.5 s)")
     parser.add_argument("--png", default="convergence.png", metavar="PATH",
                         help="the log-log plot of error against dt (default: convergence.png)")
+    add_worker_arguments(parser)
 
 
 def run(args) -> int:
     from ..convergence import FINAL_TIME, measure_convergence
     from ..errors import require
     from ..integrators import integrator_names
+    from ..runner import WorkerLost, check_workers
 
     integrators = args.integrators or integrator_names()
     for name in integrators:
@@ -27,8 +32,14 @@ def run(args) -> int:
     final_time = FINAL_TIME if args.final_time is None else args.final_time
     require(final_time > 0, "final-time", final_time, "must be > 0 s")
     require(args.png.lower().endswith(".png"), "png", args.png, "must end in .png")
+    check_workers(args.workers)
     started = time.perf_counter()
-    results = measure_convergence(integrators, final_time)
+    try:
+        results = measure_convergence(integrators, final_time, workers=args.workers,
+                                      dask=args.dask, parallel=True)
+    except WorkerLost as error:
+        print(f"springsim convergence: a run was lost: {error}", file=sys.stderr)
+        return 1
     elapsed = time.perf_counter() - started
     print("\n".join(table_lines(results)))
     plot_convergence(args.png, results, final_time)

@@ -1,6 +1,8 @@
 """`springsim sweep`: one scene over a grid of values, on every local core or a Dask cluster."""
 import sys
 
+from ._workers import add_worker_arguments
+
 NAME = "sweep"
 HELP = ("run a scene for every combination of varied keys (and seeds) on every local core or "
         "a Dask cluster: OUT/results.csv, resumable")
@@ -27,12 +29,7 @@ def add_arguments(parser) -> None:
                              "are skipped)")
     parser.add_argument("--save", choices=["npz"],
                         help="also keep every run's recording as OUT/runs/run-<run_id>.npz")
-    parser.add_argument("--workers", type=int, metavar="N",
-                        help="local worker processes (default: every core)")
-    parser.add_argument("--dask", metavar="ADDRESS",
-                        help="run on the Dask cluster whose scheduler is at ADDRESS, for example "
-                             "tcp://scheduler:8786 (default: $DASK_SCHEDULER_ADDRESS if set, "
-                             "else local processes)")
+    add_worker_arguments(parser)
     parser.add_argument("--plot", action="append", default=[], metavar="KEY:RESULT",
                         help="chart a result column against a varied key as "
                              "OUT/RESULT-vs-KEY.png (repeatable)")

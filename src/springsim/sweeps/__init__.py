@@ -90,9 +90,7 @@ def run_all(specs, workers, address, out, progress):
         return
     first_of_each = {spec.scene.integrator: spec.scene for spec in reversed(specs)}
     warm_kernels(first_of_each.values())
-    runner = Runner(workers=workers, address=address)
-    runner.workers = min(runner.workers, len(specs))   # no idle local workers
-    with runner, tqdm(total=len(specs), unit="run", desc="sweep", leave=False,
+    with Runner(workers, address, tasks=len(specs)) as runner, tqdm(total=len(specs), unit="run", desc="sweep", leave=False,
                       disable=None if progress else True) as bar:
         for outcome in runner.map(run_one, specs):
             spec = specs[outcome.index]
