@@ -30,9 +30,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--save", choices=["npz"],
                         help="also keep every run's recording as OUT/runs/run-<run_id>.npz")
     add_worker_arguments(parser)
-    parser.add_argument("--plot", action="append", default=[], metavar="KEY:RESULT",
+    parser.add_argument("--plot", action="append", default=[], metavar="KEY:RESULT[:PATH]",
                         help="chart a result column against a varied key as "
-                             "OUT/RESULT-vs-KEY.png (repeatable)")
+                             "OUT/RESULT-vs-KEY.png, or as PATH (repeatable)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 

@@ -39,8 +39,8 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     texts applied first. ``workers`` local processes (default: every core), or the Dask
     scheduler at ``dask`` (default: DASK_SCHEDULER_ADDRESS, if set). With ``out`` the table goes
     to OUT/results.csv as runs finish, runs already there are skipped, ``save="npz"`` keeps each
-    run's recording in OUT/runs/, and each "KEY:RESULT" of ``plot`` charts a result against a
-    varied key in OUT. ``on_row(row)`` is called as each run finishes.
+    run's recording in OUT/runs/. Each "KEY:RESULT" of ``plot`` charts a result against a
+    varied key as OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is called as each run finishes.
     """
     variations = variations_of(vary)
     require(save is None or save in SAVE_FORMATS, "--save", save,
@@ -52,9 +52,7 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     specs = build_grid(scene, variations, overrides=settings, seeds=seeds, fps=fps,
                        save=save is not None)
     keys = [variation.key for variation in variations]
-    charts = [parse_plot(text, keys + (["seed"] if seeds else [])) for text in plot]
-    require(not charts or out is not None, "--plot", plot[0] if plot else None,
-            "needs --out, the folder the chart goes to")
+    charts = [parse_plot(text, keys + (["seed"] if seeds else []), out) for text in plot]
     table = ResultsTable(out, columns(keys, bool(seeds), save is not None)) if out else None
     done = resume(table, specs, out) if table else {}
     rows = dict(done)
@@ -68,8 +66,8 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     ordered = [rows[spec.index] for spec in specs]
     if table:
         table.write(ordered)
-        for key, result in charts:
-            plot_sweep(ordered, key, result, os.path.join(out, f"{result}-vs-{key}.png"))
+    for key, result, path in charts:
+        plot_sweep(ordered, key, result, path)
     return ordered
 
 

@@ -1,19 +1,29 @@
 """A chart of one result of a sweep against one varied key: a line per combination of the other
 varied keys, a point per seed, the line through the seeds' mean. Runs that did not finish (status
 diverged or error) are left out; a value of the key where every run failed shows as a gap."""
+import os
+
 import numpy as np
 
 from ..errors import require
 from .run import RESULTS
 
 
-def parse_plot(text: str, keys: list[str]) -> tuple[str, str]:
-    """``KEY:RESULT`` checked against the varied keys and the result columns."""
-    key, separator, result = str(text).rpartition(":")
-    require(separator == ":" and key in keys and result in RESULTS, "--plot", text,
-            "must be KEY:RESULT with KEY one of " + ", ".join(keys or ["(nothing varied)"])
-            + " and RESULT one of " + ", ".join(RESULTS))
-    return key, result
+def parse_plot(text: str, keys: list[str], out: str | None) -> tuple[str, str, str]:
+    """``KEY:RESULT`` or ``KEY:RESULT:PATH`` checked against the varied keys, the result columns
+    and the file system: (key, result, path of the PNG; by default OUT/RESULT-vs-KEY.png)."""
+    key, _, rest = str(text).partition(":")
+    result, _, path = rest.partition(":")
+    require(key in keys and result in RESULTS, "--plot", text,
+            "must be KEY:RESULT or KEY:RESULT:PATH with KEY one of "
+            + ", ".join(keys or ["(nothing varied)"]) + " and RESULT one of " + ", ".join(RESULTS))
+    require(path or out is not None, "--plot", text, "needs --out, or a PATH for the chart")
+    path = path or os.path.join(out, f"{result}-vs-{key}.png")
+    require(path.lower().endswith(".png"), "--plot", text, "the chart's PATH must end in .png")
+    folder = os.path.dirname(os.path.abspath(path))
+    require(os.path.isdir(folder) or folder == os.path.abspath(out or ""), "--plot", text,
+            f"the folder {folder} does not exist")
+    return key, result, path
 
 
 def plot_sweep(rows, key: str, result: str, path) -> None:
