@@ -18,7 +18,7 @@ import tempfile
 
 from ..errors import require
 from ..recording import atomic_output
-from ..runner import Runner, warm_kernels
+from ..runner import Runner, check_workers, warm_kernels
 from .grid import Variation, build_grid, parse_variation
 from .plot import parse_plot, plot_sweep
 from .run import NPZ, run_one
@@ -43,6 +43,7 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     varied key as OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is called as each run finishes.
     """
     variations = variations_of(vary)
+    check_workers(workers)
     require(save is None or save in SAVE_FORMATS, "--save", save,
             "must be " + " or ".join(SAVE_FORMATS))
     require(save is None or out is not None, "--save", save, "needs --out, the folder to save to")
