@@ -109,7 +109,10 @@ class Runner:
                 with dask.config.set(LOCAL_SCHEDULER):
                     cluster = self._stack.enter_context(LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=logging.CRITICAL))
+                        dashboard_address=None, silence_logs=logging.CRITICAL,
+                        # no dashboard, and its HTTP server on a free port: not a warning
+                        # whenever port 8787 is taken by another cluster
+                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}))
                 self.client = self._stack.enter_context(Client(cluster))
             self._stack = self._stack.pop_all()
         return self
@@ -144,14 +147,16 @@ class Runner:
 
 
 def _outcome(index: int, future) -> Outcome:
+    """Wait for the value (a future whose result was lost with its worker is recomputed first)."""
     from distributed import KilledWorker
 
-    if future.status == "finished":
+    try:
         return Outcome(index, value=future.result())
-    error = future.exception()
-    if isinstance(error, KilledWorker):
-        error = WorkerLost("its worker process died (killed or out of memory) on every try")
-    return Outcome(index, error=error)
+    except KilledWorker:
+        return Outcome(index, error=WorkerLost("its worker process died (killed or out of "
+                                               "memory) on every try"))
+    except Exception as error:   # noqa: BLE001 - the task's own error, for the caller to judge
+        return Outcome(index, error=error)
 
 
 @contextlib.contextmanager
