@@ -22,18 +22,10 @@ from springsim.simulation import Simulation
 from springsim.sweeps import build_grid, parse_variation
 from springsim.sweeps.grid import SEED_AMPLITUDE, perturb
 from springsim.sweeps.run import results
+from test_stability import SMALL_DROP as STABILITY_DROP
 
-SMALL_DROP = """
-name = "small-drop"
-duration = 0.25
-[[bodies]]
-type = "cube"
-particles_per_edge = 3
-edge_length = 1.0
-position = [0.0, 1.0, 0.0]
-[[terrains]]
-type = "plane"
-"""
+# the small cube on the plane of the stability tests, 0.25 s long
+SMALL_DROP = "duration = 0.25\n" + STABILITY_DROP
 
 FREE_FALL = """
 name = "free-fall"
