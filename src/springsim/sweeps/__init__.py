@@ -19,6 +19,7 @@ import tempfile
 from ..errors import require
 from ..recording import atomic_output
 from ..runner import Runner, check_workers, warm_kernels
+from ..scenefile import toml_value
 from .grid import Variation, build_grid, parse_variation
 from .plot import parse_plot, plot_sweep
 from .run import NPZ, run_one
@@ -40,7 +41,8 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     scheduler at ``dask`` (default: DASK_SCHEDULER_ADDRESS, if set). With ``out`` the table goes
     to OUT/results.csv as runs finish, runs already there are skipped, ``save="npz"`` keeps each
     run's recording in OUT/runs/. Each "KEY:RESULT" of ``plot`` charts a result against a
-    varied key as OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is called as each run finishes.
+    varied key as OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is
+    called as each run finishes.
     """
     variations = variations_of(vary)
     check_workers(workers)
@@ -49,7 +51,7 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     require(save is None or out is not None, "--save", save, "needs --out, the folder to save to")
     settings = list(overrides)
     if duration is not None:
-        settings.append(f"duration={float(duration)!r}")
+        settings.append(f"duration={toml_value(duration)}")
     specs = build_grid(scene, variations, overrides=settings, seeds=seeds, fps=fps,
                        save=save is not None)
     keys = [variation.key for variation in variations]
@@ -76,9 +78,17 @@ def variations_of(vary) -> list[Variation]:
     if vary is None:
         return []
     if isinstance(vary, dict):
-        return [parse_variation(f"{key}={values}") if isinstance(values, str)
-                else Variation(str(key), tuple(values)) for key, values in vary.items()]
+        return [variation_of(key, values) for key, values in vary.items()]
     return [parse_variation(text) for text in vary]
+
+
+def variation_of(key, values) -> Variation:
+    """A key's values: a list, or a "V1,V2" or "START:STOP:COUNT" text."""
+    if isinstance(values, str):
+        return parse_variation(f"{key}={values}")
+    require(isinstance(values, (list, tuple)) and len(values) > 0, str(key), values,
+            "must be a list of values or a text 'V1,V2,...' or 'START:STOP:COUNT'")
+    return Variation(str(key), tuple(values))
 
 
 def run_all(specs, workers, address, out, progress):
