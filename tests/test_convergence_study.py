@@ -49,3 +49,16 @@ def test_convergence_command_prints_slopes_and_writes_the_plot(capsys, tmp_path)
     assert slopes["midpoint"] == pytest.approx(2.0, abs=0.3)
     assert slopes["rk4"] == pytest.approx(4.0, abs=0.3)
     assert chart.read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
+
+
+def test_runs_on_worker_processes_give_the_same_errors():
+    """The same runs wherever they run. Not compared bit for bit: when this process compiles a
+    kernel afresh (the first test run after an edit) and the workers load it from the on-disk
+    cache, implicit_euler's last bits can differ (a Numba effect, reported to the lead)."""
+    integrators = ["explicit_euler", "rk4", "implicit_euler"]
+    steps = {1: (2000, 4000), 2: (250, 500), 4: (125, 250)}
+    here = measure_convergence(integrators, step_counts=steps)
+    there = measure_convergence(integrators, step_counts=steps, workers=2, parallel=True)
+    for mine, theirs in zip(here, there):
+        assert (theirs.integrator, theirs.dts) == (mine.integrator, mine.dts)
+        assert theirs.errors == pytest.approx(mine.errors, rel=1e-9, abs=0)

@@ -128,3 +128,21 @@ def test_stability_command_refuses_an_unknown_integrator(capsys, tmp_path):
     assert code == 2
     assert "backward_euler" in capsys.readouterr().err
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_searches_on_worker_processes_find_the_limits_found_here():
+    """The runner (springsim.runner) changes where a search runs, not what it finds."""
+    from dataclasses import replace
+
+    from springsim.stability import Search, find_stability_limits
+
+    methods = ["explicit_euler", "rk4", "implicit_euler"]
+    here = [find_stability_limit(corner_scene, method, seconds=1.0, tolerance=0.1)
+            for method in methods]
+    there = find_stability_limits([Search(corner_scene(), method, seconds=1.0, tolerance=0.1)
+                                   for method in methods], workers=2)
+    assert [replace(limit, trials=()) for limit in there] == [replace(limit, trials=())
+                                                              for limit in here]
+    for mine, theirs in zip(here, there):
+        assert ([(t.dt, t.stable, t.reason, t.simulated) for t in theirs.trials]
+                == [(t.dt, t.stable, t.reason, t.simulated) for t in mine.trials])

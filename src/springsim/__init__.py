@@ -12,6 +12,7 @@ from .presets import preset_names
 from .scene import Scene
 from .scenefile import load_scene
 from .simulation import Simulation
+from .sweeps import sweep
 
 __all__ = ["Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
-           "integrator_names", "preset_names"]
+           "integrator_names", "preset_names", "sweep"]

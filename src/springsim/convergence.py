@@ -12,6 +12,8 @@ fast modes are resolved; above the reference's and round-off's floor): halvings 
 for first-order methods, 250 for second and 125 for fourth. Backward Euler's linear solves run to
 a relative residual of 1e-12 here, so that its error is the method's and not the solver's.
 """
+import functools
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,24 +83,51 @@ def reference_positions(simulation: Simulation, final_time: float) -> np.ndarray
 
 
 def measure_convergence(integrators, final_time: float = FINAL_TIME,
-                        step_counts: dict | None = None, on_result=None) -> list:
+                        step_counts: dict | None = None, on_result=None, workers=None,
+                        dask: str | None = None, parallel: bool = False) -> list:
     """A ConvergenceResult per integrator; ``step_counts`` maps an order to its step counts
-    (default STEP_COUNTS). ``on_result(result)`` is called after each integrator."""
+    (default STEP_COUNTS). ``on_result(result)`` is called after each integrator.
+
+    With ``parallel`` the runs (one per integrator and step count) and the reference go to
+    ``workers`` local processes (default: every core) or the Dask cluster at ``dask``
+    (springsim.runner); each is the same computation wherever it runs, so the errors are the
+    same."""
     from .integrators import REGISTRY
 
     step_counts = step_counts or STEP_COUNTS
-    reference = reference_positions(squeezed_cube(), final_time)
+    runs = [(name, final_time / count, count) for name in integrators
+            for count in step_counts[min(step_counts,
+                                         key=lambda o: abs(o - REGISTRY[name].order))]]
+    tasks = [functools.partial(final_positions, run) for run in runs]
+    tasks.append(functools.partial(squeezed_cube_reference, final_time))
+    if parallel:
+        from .runner import Runner, warm_kernels
+
+        warm_kernels([squeezed_cube(name).scene for name in dict.fromkeys(integrators)])
+        with Runner(workers, dask, tasks=len(tasks)) as runner:
+            *positions, reference = runner.results(operator.call, tasks)
+    else:
+        *positions, reference = [task() for task in tasks]
     results = []
     for name in integrators:
-        order = REGISTRY[name].order
-        counts = step_counts[min(step_counts, key=lambda o: abs(o - order))]
-        dts, errors = [], []
-        for count in counts:
-            simulation = squeezed_cube(name, final_time / count, EXACT_SOLVES.get(name))
-            simulation.step(count)
-            dts.append(final_time / count)
-            errors.append(float(np.abs(simulation.positions - reference).max()))
-        results.append(ConvergenceResult(name, order, tuple(dts), tuple(errors)))
+        mine = [(dt, float(np.abs(x - reference).max()))
+                for (run_name, dt, _), x in zip(runs, positions) if run_name == name]
+        results.append(ConvergenceResult(name, REGISTRY[name].order,
+                                         tuple(dt for dt, _ in mine),
+                                         tuple(error for _, error in mine)))
         if on_result is not None:
             on_result(results[-1])
     return results
+
+
+def squeezed_cube_reference(final_time: float) -> np.ndarray:
+    return reference_positions(squeezed_cube(), final_time)
+
+
+def final_positions(run) -> np.ndarray:
+    """The positions after ``count`` steps of ``dt`` of the squeezed cube, for ``run`` =
+    (integrator, dt, count)."""
+    name, dt, count = run
+    simulation = squeezed_cube(name, dt, EXACT_SOLVES.get(name))
+    simulation.step(count)
+    return simulation.positions

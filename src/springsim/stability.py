@@ -16,9 +16,11 @@ every step asked about). Otherwise dt halves until a trial is stable (unstable t
 within a few steps), then bisects geometrically between the largest stable and the smallest
 unstable step until they are within ``tolerance`` (relative) of each other.
 """
+import copy
+import functools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -118,6 +120,40 @@ def find_stability_limit(make_scene, integrator: str, *, seconds: float = 3.0,
                 unstable = middle
     return StabilityLimit(scene=scene_name, integrator=integrator, largest_stable=stable,
                           smallest_unstable=unstable, trials=tuple(trials))
+
+
+@dataclass(frozen=True)
+class Search:
+    """One search of ``find_stability_limits``: a scene (a Scene, copied for every trial) and an
+    integrator, with the arguments of ``find_stability_limit``."""
+
+    scene: object
+    integrator: str
+    seconds: float = 3.0
+    max_dt: float = 0.1
+    tolerance: float = 0.05
+    options: dict | None = None
+
+    def run(self) -> StabilityLimit:
+        return find_stability_limit(functools.partial(copy.deepcopy, self.scene), self.integrator,
+                                    seconds=self.seconds, max_dt=self.max_dt,
+                                    tolerance=self.tolerance, options=self.options)
+
+
+def find_stability_limits(searches, workers: int | None = None, dask: str | None = None,
+                          on_limit=None) -> list[StabilityLimit]:
+    """``search.run()`` for every search, on local worker processes (default: every core) or
+    the Dask cluster at ``dask``; in the order given. ``on_limit(limit)`` is called as each search
+    finishes. Each search is the same sequence of trials wherever it runs, so the limits are
+    those of ``find_stability_limit``."""
+    from .runner import Runner, warm_kernels
+
+    searches = list(searches)
+    warm_kernels({s.integrator: replace(s.scene, integrator=s.integrator)
+                  for s in searches}.values())
+    with Runner(workers, dask, tasks=len(searches)) as runner:
+        return runner.results(Search.run, searches,
+                              None if on_limit is None else lambda _, limit: on_limit(limit))
 
 
 def motion_energy(energy: dict) -> float:

@@ -1,6 +1,9 @@
 """`springsim convergence`: the measured order of accuracy of each integrator."""
 import math
+import sys
 import time
+
+from ._workers import add_worker_arguments
 
 NAME = "convergence"
 MAX_FINAL_TIME = 60.0   # s: the reference solve and the smallest steps grow with it
@@ -15,12 +18,14 @@ def add_arguments(parser) -> None:
                         help="time at which the error is measured (default: 0.5 s)")
     parser.add_argument("--png", default="convergence.png", metavar="PATH",
                         help="the log-log plot of error against dt (default: convergence.png)")
+    add_worker_arguments(parser)
 
 
 def run(args) -> int:
     from ..convergence import FINAL_TIME, measure_convergence
     from ..errors import require
     from ..integrators import integrator_names
+    from ..runner import WorkerLost, check_workers
     from ..safe_files import check_output_path
 
     integrators = args.integrators or integrator_names()
@@ -32,8 +37,14 @@ def run(args) -> int:
             final_time, f"must be a time > 0 s and at most {MAX_FINAL_TIME:g} s")
     require(args.png.lower().endswith(".png"), "png", args.png, "must end in .png")
     check_output_path("--png", args.png)
+    check_workers(args.workers)
     started = time.perf_counter()
-    results = measure_convergence(integrators, final_time)
+    try:
+        results = measure_convergence(integrators, final_time, workers=args.workers,
+                                      dask=args.dask, parallel=True)
+    except WorkerLost as error:
+        print(f"springsim convergence: a run was lost: {error}", file=sys.stderr)
+        return 1
     elapsed = time.perf_counter() - started
     print("\n".join(table_lines(results)))
     plot_convergence(args.png, results, final_time)

@@ -2,6 +2,8 @@
 import sys
 import time
 
+from ._workers import add_worker_arguments
+
 NAME = "stability"
 HELP = ("largest stable time step of each integrator on each scene, by bisection: a table, "
         "CSV and a PNG chart")
@@ -29,6 +31,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--png", default="stability.png", metavar="PATH",
                         help="the chart, log scale (default: stability.png)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_worker_arguments(parser)
 
 
 def run(args) -> int:
@@ -36,15 +39,16 @@ def run(args) -> int:
     from ..integrators import integrator_names
     from ..safe_files import check_output_path
     from ..scenefile import load_scene
-    from ..stability import find_stability_limit
+    from ..runner import WorkerLost, check_workers
+    from ..stability import Search, find_stability_limits
 
     scenes = args.scenes or list(JELLY_SCENES)
     integrators = args.integrators or integrator_names()
     for name in integrators:
         require(name in integrator_names(), "integrator", name,
                 "must be one of " + ", ".join(integrator_names()))
-    for scene in scenes:
-        load_scene(scene)   # a misspelt scene fails now, not after minutes of trials
+    check_workers(args.workers)
+    loaded = {scene: load_scene(scene) for scene in scenes}   # a misspelt scene fails now
     require(args.png.lower().endswith(".png"), "png", args.png, "must end in .png")
     check_output_path("--csv", args.csv)
     check_output_path("--png", args.png)
@@ -53,13 +57,14 @@ def run(args) -> int:
     tolerance = args.tolerance if args.tolerance is not None else (QUICK["tolerance"]
                                                                    if args.quick else 0.05)
     started = time.perf_counter()
-    limits = []
-    for scene in scenes:
-        for integrator in integrators:
-            progress = None if args.quiet else _progress(scene, integrator)
-            limits.append(find_stability_limit(
-                lambda scene=scene: load_scene(scene), integrator, seconds=seconds,
-                max_dt=args.max_dt, tolerance=tolerance, on_trial=progress))
+    searches = [Search(loaded[scene], integrator, seconds, args.max_dt, tolerance)
+                for scene in scenes for integrator in integrators]
+    try:
+        limits = find_stability_limits(searches, args.workers, args.dask,
+                                       on_limit=None if args.quiet else _progress)
+    except WorkerLost as error:
+        print(f"springsim stability: a search was lost: {error}", file=sys.stderr)
+        return 1
     elapsed = time.perf_counter() - started
     print("\n".join(table_lines(limits)))
     write_csv(args.csv, limits, seconds, tolerance)
@@ -70,13 +75,13 @@ def run(args) -> int:
     return 0
 
 
-def _progress(scene, integrator):
-    def report(trial):
+def _progress(limit) -> None:
+    """The trials of a finished search, one line each."""
+    for trial in limit.trials:
         verdict = ("stable" if trial.stable
                    else f"unstable ({trial.reason} at t = {trial.simulated:.2f} s)")
-        print(f"  {scene} {integrator} dt = {trial.dt:.4g} s: {verdict}", file=sys.stderr,
-              flush=True)
-    return report
+        print(f"  {limit.scene} {limit.integrator} dt = {trial.dt:.4g} s: {verdict}",
+              file=sys.stderr, flush=True)
 
 
 def describe(limit) -> str:
