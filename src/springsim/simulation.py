@@ -112,10 +112,12 @@ class Simulation:
         self.state.steps += done
         if particle >= 0:
             v = self.state.velocities[particle]
+            with np.errstate(over="ignore", invalid="ignore"):   # inf is the honest answer
+                speed_squared = float(v @ v)
             raise SimulationDiverged(
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
                 dt=self.dt, particle=particle, position=self.state.positions[particle],
-                speed_squared=float(v @ v))
+                speed_squared=speed_squared)
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more (rounded to whole steps)."""
