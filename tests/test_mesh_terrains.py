@@ -161,3 +161,35 @@ def test_kernels_calling_the_generated_dispatcher_load_from_the_cache():
                                 capture_output=True, text=True).stdout
     hits, misses = output.split()[-2:]
     assert (hits, misses) == ("1", "0")
+
+
+def test_contact_looked_up_a_block_ahead_is_the_planes(folder):
+    """A mesh terrain's distances are looked up a block of particles ahead of their contact
+    (contact.py): on a flat mesh floor every particle, in every block (1000 particles: the last
+    block partial), gets the plane's reaction and friction to round-off, pinned ones none, with a
+    second terrain after it in the list."""
+    from springsim.contact import apply_contact_forces
+    from springsim.model import build_model
+    from springsim.terrains import Plane
+
+    floor = MeshTerrain(file=square(folder / "flat.obj", (0.0, 1.0, 0.0), 10.0,
+                                    center=(0.0, -1.0, 0.0)))
+    far = Sphere(center=(0.0, 50.0, 0.0))   # touched by no particle
+    rng = np.random.default_rng(5)
+    x = np.column_stack([rng.uniform(-8, 8, 1000), -1.0 + rng.uniform(-0.02, 0.03, 1000),
+                         rng.uniform(-8, 8, 1000)])
+    v = rng.normal(0.0, 0.01, (1000, 3))   # some stick, some slide
+    a = rng.normal(0.0, 10.0, (1000, 3)) + (0.0, -G, 0.0)
+    results = []
+    for terrain in (Plane(point=(0.0, -1.0, 0.0)), floor):
+        model = build_model(Scene(bodies=[Cube(particles_per_edge=2)], terrains=[terrain, far]))
+        inv_mass = np.ones(1000)
+        inv_mass[::7] = 0.0
+        arrays = model.arrays._replace(inv_mass=inv_mass, radius=np.zeros(1000),
+                                       terrain_offset=np.zeros(1000))
+        out = a.copy()
+        apply_contact_forces(arrays, x, v, 1e-3, out)
+        results.append(out)
+    touched = np.any(results[0] != a, axis=1)
+    assert touched.sum() > 300 and not touched[::7].any()
+    np.testing.assert_allclose(results[1], results[0], rtol=0, atol=1e-9 * np.abs(a).max())

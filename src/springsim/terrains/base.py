@@ -13,7 +13,9 @@ the kind in lists and menus. The class provides:
 - ``display_mesh(near, extent) -> render.terrain_meshes.TerrainMesh``: what is drawn, given the
   bodies' middle and size;
 - ``points_near(corners, size)``: points of the terrain under a box, for cameras;
-- ``validate(key)``, and the contact settings of ``Contact``.
+- ``validate(key)``, and the contact settings of ``Contact``;
+- optionally ``look_ahead = True``: the kernel is long (a mesh's grid), and the contact kernel
+  looks it up a block of particles ahead of their contact (contact.py says why).
 """
 from dataclasses import dataclass
 

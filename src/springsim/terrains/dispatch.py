@@ -61,4 +61,19 @@ def build_dispatcher(kinds):
         namespace["terrain_distance"])
 
 
+def looks_ahead_source(kinds) -> str:
+    numbers = [number for number, cls in enumerate(kinds) if getattr(cls, "look_ahead", False)]
+    return ("def terrain_looks_ahead(kind):\n"
+            f"    return {' or '.join(f'kind == {n}' for n in numbers) or 'False'}\n")
+
+
+def build_looks_ahead(kinds):
+    """``terrain_looks_ahead(kind)``: whether the kind's class sets ``look_ahead`` (a long
+    lookup, which the contact kernel does a block of particles ahead; contact.py says why)."""
+    namespace = {}
+    exec(compile(looks_ahead_source(kinds), FILENAME, "exec"), namespace)
+    return njit(inline="always")(namespace["terrain_looks_ahead"])
+
+
 terrain_distance = build_dispatcher(KINDS)
+terrain_looks_ahead = build_looks_ahead(KINDS)

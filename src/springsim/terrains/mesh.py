@@ -146,6 +146,7 @@ class MeshTerrain(Contact):
     resolution: int = 128
 
     distance_kernel = mesh_distance
+    look_ahead = True   # a long lookup: contact does it a block of particles ahead (contact.py)
 
     def validate(self, key: str) -> None:
         self.validate_contact(key)
