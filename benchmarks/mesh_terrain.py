@@ -85,17 +85,18 @@ def contact_pass(terrain, x, a=None):
 
 
 def alternate_best(passes: dict, repeats: int = 5) -> dict:
-    """Seconds per particle of each pass (name -> (function, particles)), timed in turn,
-    best of CONTACT_ROUNDS: the machine's load falls on all of them alike."""
+    """Seconds per particle of each pass (name -> (function, particles)): the passes take turns,
+    ``repeats`` calls each, CONTACT_ROUNDS times, and each call is timed alone (best of all): the
+    machine's load falls on all of them alike."""
     best = dict.fromkeys(passes, np.inf)
     for function, _ in passes.values():
         function()   # compile
     for _ in range(CONTACT_ROUNDS):
         for name, (function, count) in passes.items():
-            start = time.perf_counter()
             for _ in range(repeats):
+                start = time.perf_counter()
                 function()
-            best[name] = min(best[name], (time.perf_counter() - start) / repeats / count)
+                best[name] = min(best[name], (time.perf_counter() - start) / count)
     return best
 
 

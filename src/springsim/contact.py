@@ -49,6 +49,42 @@ def apply_contact_forces(model, x, v, h, a):
     16 ns a particle in benchmarks/mesh_terrain.py); a short one (the plane) is looked up in
     place, which is faster for it. A particle meets the terrains in the same order either way."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
+    blocks = False
+    for t in range(epsilon.shape[0]):
+        blocks = blocks or terrain_looks_ahead(model.terrain_kind[t])
+    if blocks:
+        apply_contact_forces_in_blocks(model, x, v, h, a)
+        return
+    for i in range(x.shape[0]):
+        if model.inv_mass[i] == 0.0:
+            continue
+        for t in range(epsilon.shape[0]):
+            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                               model.terrain_offset[i])
+            if phi >= epsilon[t]:
+                continue
+            a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            # The reaction cancels the push into the surface; a particle already moving away
+            # keeps the part of the push that stops it within this step (see module doc).
+            reaction = -a_n - max(v_n, 0.0) / h
+            if reaction <= 0.0:
+                continue  # pulled away from the surface, or leaving fast: no reaction, no friction
+            # tangential acceleration and tangential (sliding) velocity
+            ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
+            tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
+            fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
+            a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
+            a[i, 0] = ax + fx + a_normal * nx
+            a[i, 1] = ay + fy + a_normal * ny
+            a[i, 2] = az + fz + a_normal * nz
+
+
+@kernel
+def apply_contact_forces_in_blocks(model, x, v, h, a):
+    """apply_contact_forces, a block of particles at a time (its doc says why)."""
+    epsilon, friction = model.terrain_epsilon, model.terrain_friction
     found = np.empty((BLOCK, 4))
     for start in range(0, x.shape[0], BLOCK):
         stop = min(start + BLOCK, x.shape[0])
