@@ -4,12 +4,11 @@ import numpy as np
 import pytest
 
 from springsim import SceneError, Simulation
-from springsim.errors import SimulationDiverged
 from springsim.forces import forces
 from springsim.integrators import available_threads
 from springsim.reference import reference_forces
 from springsim.scenefile import load_scene
-from springsim.spring_runs import PARTITION, chunk_count, partition_count
+from springsim.spring_runs import PARTITION, partition_count
 
 EDGE = 51   # 132,651 particles: the smallest cube whose force loop has two partitions
 
@@ -53,49 +52,3 @@ def test_steps_are_bit_identical_for_any_number_of_threads(large_cube):
 def test_a_bad_thread_count_is_refused_before_any_work(threads):
     with pytest.raises(SceneError, match="threads"):
         Simulation(load_scene("jelly-plane"), threads=threads)
-
-
-def test_terrain_contact_is_bit_identical_for_any_number_of_threads(large_cube):
-    """The contact passes (contact.py) run on threads in fixed chunks: with the lower half of
-    the cube pushed through the plane y = -1 and falling, rk4's steps agree bit for bit, and
-    each ends with no particle below the plane (the impact pass lifts them out)."""
-    start = large_cube.state.copy()
-    positions = start.positions.copy()
-    positions[:, 1] += -1.0 - np.median(positions[:, 1])   # half the particles under the plane
-    velocities = np.zeros_like(positions)
-    velocities[:, 1] = -2.0
-    scene = load_scene("jelly-plane", [f"bodies.0.particles_per_edge={EDGE}"])
-    simulation = Simulation(scene, integrator="rk4", dt=1e-4)
-    results = []
-    for threads in sorted({1, min(2, available_threads()), available_threads()}):
-        simulation.state.positions[:] = positions
-        simulation.state.velocities[:] = velocities
-        simulation.threads = threads
-        simulation.step(2)
-        results.append((simulation.state.positions.copy(), simulation.state.velocities.copy()))
-    for x, v in results[1:]:
-        assert np.array_equal(x, results[0][0]) and np.array_equal(v, results[0][1])
-    assert results[0][0][:, 1].min() >= -1.0 - 1e-12
-    assert (positions[:, 1] < -1.0).sum() > simulation.model.particle_count // 3
-
-
-@pytest.mark.parametrize("threads", sorted({1, min(2, available_threads())}))
-def test_the_first_diverged_particle_is_the_smallest_whatever_the_threads(large_cube, threads):
-    """The divergence check runs in fixed chunks (spring_runs.chunk_count): with particles
-    diverging in several chunks, the one reported is the smallest index that a plain NumPy
-    check of the state after the step finds."""
-    start = large_cube.state.copy()
-    count = large_cube.model.particle_count
-    chunk = count // chunk_count(count)
-    large_cube.state.velocities[[5 * chunk + 17, 2 * chunk + 3, count - 1]] = 1e9
-    large_cube.threads = threads
-    try:
-        with pytest.raises(SimulationDiverged) as raised:
-            large_cube.step(1)
-        x, v = large_cube.state.positions, large_cube.state.velocities
-        with np.errstate(over="ignore", invalid="ignore"):
-            bad = np.flatnonzero(~((v * v).sum(axis=1) <= 1e6) | ~np.isfinite(x.sum(axis=1)))
-        assert len(np.unique(bad // chunk)) >= 3   # found in several chunks
-        assert raised.value.particle == bad[0]
-    finally:
-        large_cube.state = start

@@ -29,51 +29,38 @@ How contact enters an integrator, and why:
 """
 import math
 
-from numba import prange
-
-from ._jit import inline_kernel, kernel
-from .spring_runs import chunk_count
+from ._jit import kernel
 from .terrains import terrain_distance
 
 
-@inline_kernel
+@kernel
 def apply_contact_forces(model, x, v, h, a):
-    """Cancel accelerations into touched terrains and add Coulomb friction (see module doc).
-    Particle by particle, in fixed chunks: on threads in a parallel kernel (spring_runs.py)."""
-    count = x.shape[0]
-    chunks = chunk_count(count)
-    for k in prange(chunks):
-        for i in range(k * count // chunks, (k + 1) * count // chunks):
-            apply_contact_force(model, x, v, h, a, i)
-
-
-@inline_kernel
-def apply_contact_force(model, x, v, h, a, i):
-    """apply_contact_forces for particle i."""
+    """Cancel accelerations into touched terrains and add Coulomb friction (see module doc)."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
-    if model.inv_mass[i] == 0.0:
-        return
-    for t in range(epsilon.shape[0]):
-        phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                           model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                           model.terrain_offset[i])
-        if phi >= epsilon[t]:
+    for i in range(x.shape[0]):
+        if model.inv_mass[i] == 0.0:
             continue
-        a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
-        v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-        # The reaction cancels the push into the surface; a particle already moving away
-        # keeps the part of the push that stops it within this step (see module doc).
-        reaction = -a_n - max(v_n, 0.0) / h
-        if reaction <= 0.0:
-            continue  # pulled away from the surface, or leaving fast: no reaction, no friction
-        # tangential acceleration and tangential (sliding) velocity
-        ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
-        tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
-        fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
-        a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
-        a[i, 0] = ax + fx + a_normal * nx
-        a[i, 1] = ay + fy + a_normal * ny
-        a[i, 2] = az + fz + a_normal * nz
+        for t in range(epsilon.shape[0]):
+            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                               model.terrain_offset[i])
+            if phi >= epsilon[t]:
+                continue
+            a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            # The reaction cancels the push into the surface; a particle already moving away
+            # keeps the part of the push that stops it within this step (see module doc).
+            reaction = -a_n - max(v_n, 0.0) / h
+            if reaction <= 0.0:
+                continue  # pulled away from the surface, or leaving fast: no reaction, no friction
+            # tangential acceleration and tangential (sliding) velocity
+            ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
+            tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
+            fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
+            a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
+            a[i, 0] = ax + fx + a_normal * nx
+            a[i, 1] = ay + fy + a_normal * ny
+            a[i, 2] = az + fz + a_normal * nz
 
 
 @kernel
@@ -97,41 +84,31 @@ def coulomb_friction(ax, ay, az, tx, ty, tz, limit, h):
     return limit * sx / stick, limit * sy / stick, limit * sz / stick
 
 
-@inline_kernel
+@kernel
 def resolve_terrain_impacts(model, x, v):
-    """After a step: reflect approaching velocities with restitution, lift particles out.
-    Particle by particle, in fixed chunks: on threads in a parallel kernel (spring_runs.py)."""
-    count = x.shape[0]
-    chunks = chunk_count(count)
-    for k in prange(chunks):
-        for i in range(k * count // chunks, (k + 1) * count // chunks):
-            resolve_terrain_impact(model, x, v, i)
-
-
-@inline_kernel
-def resolve_terrain_impact(model, x, v, i):
-    """resolve_terrain_impacts for particle i."""
+    """After a step: reflect approaching velocities with restitution, lift particles out."""
     epsilon, restitution = model.terrain_epsilon, model.terrain_restitution
     g = model.gravity
     g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-    if model.inv_mass[i] == 0.0:
-        return
-    for t in range(epsilon.shape[0]):
-        phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                           model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                           model.terrain_offset[i])
-        if phi >= epsilon[t]:
+    for i in range(x.shape[0]):
+        if model.inv_mass[i] == 0.0:
             continue
-        v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-        if v_n < 0.0:
-            # slower than this, the rebound would stay in the band: resting contact (module doc)
-            resting_speed = math.sqrt(2.0 * g_size * epsilon[t])
-            e = restitution[t] if -v_n > resting_speed else 0.0
-            bounce = (1.0 + e) * v_n
-            v[i, 0] -= bounce * nx
-            v[i, 1] -= bounce * ny
-            v[i, 2] -= bounce * nz
-        if phi < 0.0:
-            x[i, 0] -= phi * nx
-            x[i, 1] -= phi * ny
-            x[i, 2] -= phi * nz
+        for t in range(epsilon.shape[0]):
+            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
+                                               model.terrain_offset[i])
+            if phi >= epsilon[t]:
+                continue
+            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            if v_n < 0.0:
+                # slower than this, the rebound would stay in the band: resting contact (module doc)
+                resting_speed = math.sqrt(2.0 * g_size * epsilon[t])
+                e = restitution[t] if -v_n > resting_speed else 0.0
+                bounce = (1.0 + e) * v_n
+                v[i, 0] -= bounce * nx
+                v[i, 1] -= bounce * ny
+                v[i, 2] -= bounce * nz
+            if phi < 0.0:
+                x[i, 0] -= phi * nx
+                x[i, 1] -= phi * ny
+                x[i, 2] -= phi * nz

@@ -34,7 +34,6 @@ MIN_RUN = 8         # shorter runs cost more in loop overhead than they save: lo
 TILE = 2048         # particles per tile: all runs cross one tile while its columns are in cache
 COLUMNS = 12        # rows of ``columns``: x, y, z, vx, vy, vz, fx, fy, fz, 3 rows of scratch
 PARTITION = 65536   # particles per partition of the force loop, at least (module doc)
-CHUNK = 16384       # particles per chunk of the loops over particles that threads share
 
 
 def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.ndarray) -> dict:
@@ -79,17 +78,6 @@ def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.nd
 def partition_count(particles):
     """The number of partitions of the force loop (module doc): fixed by the particle count."""
     return max(1, particles // PARTITION)
-
-
-@kernel
-def chunk_count(particles):
-    """The number of fixed chunks a loop over particles is cut into, one thread's work each (the
-    contact passes, the divergence check): like the partitions, fixed by the particle count, so
-    that a chunk's result, and which chunk finds what first, do not depend on the threads.
-    (A prange over the particles themselves also gives the same results for any count; chunks
-    keep such a loop from being fused with the loop before it, which made the fused loop of
-    the 100^3 cube's accelerations slower on two threads than on one.)"""
-    return max(1, particles // CHUNK)
 
 
 @inline_kernel

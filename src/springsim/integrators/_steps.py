@@ -21,7 +21,6 @@ from .._jit import inline_kernel, kernel
 from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..spring_runs import chunk_count
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -60,41 +59,22 @@ def add_scaled(out, x, alpha, y):
             out[i, c] = x[i, c] + alpha * y[i, c]
 
 
-@inline_kernel
+@kernel
 def first_diverged(x, v):
-    """Index of the first particle with a non-finite state or |v|^2 above the limit, else -1.
-
-    The particles are checked in fixed chunks (spring_runs.chunk_count; on threads in a
-    parallel kernel), each finding its own first; the first chunk that found one has the
-    answer, whatever the threads."""
-    count = v.shape[0]
-    chunks = chunk_count(count)
-    found = np.full(chunks, -1, np.int64)
-    for k in prange(chunks):
-        for i in range(k * count // chunks, (k + 1) * count // chunks):
-            if diverged(x, v, i):
-                found[k] = i
-                break
-    for k in range(chunks):
-        if found[k] >= 0:
-            return found[k]
+    """Index of the first particle with a non-finite state or |v|^2 above the limit, else -1."""
+    for i in range(v.shape[0]):
+        speed_squared = v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2]
+        position = x[i, 0] + x[i, 1] + x[i, 2]
+        # written so that NaN fails the test: every comparison with NaN is False
+        if not (speed_squared <= SPEED_SQUARED_LIMIT and np.abs(position) < np.inf):
+            return i
     return -1
 
 
-@inline_kernel
-def diverged(x, v, i):
-    """Whether particle i's state is not finite or its |v|^2 is above the limit."""
-    speed_squared = v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2]
-    position = x[i, 0] + x[i, 1] + x[i, 2]
-    # written so that NaN fails the test: every comparison with NaN is False
-    return not (speed_squared <= SPEED_SQUARED_LIMIT and np.abs(position) < np.inf)
-
-
-@inline_kernel
+@kernel
 def finish_step(model, x, v):
     """Everything after the integrator's update: terrain impacts, body-body collisions (balls),
-    then the divergence check. Inlined, so that a parallel kernel runs its particle loops on
-    threads."""
+    then the divergence check."""
     resolve_terrain_impacts(model, x, v)
     resolve_body_collisions(model, x, v)
     return first_diverged(x, v)
