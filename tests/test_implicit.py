@@ -11,10 +11,12 @@ from conftest import EARTH_GRAVITY, build_cube_simulation, perturb
 from springsim import SceneError, Simulation
 from springsim.bodies.balls import Ball, Balls
 from springsim.bodies.cube import Cube
-from springsim.implicit.cg import filtered_cg
+from springsim.implicit.ball_contact import no_ball_contacts
+from springsim.implicit.cg import filtered_cg, search_product
 from springsim.implicit.constraints import CONTACT, FREE, PINNED, SLIP_SPEED
-from springsim.implicit.jacobian import assemble_system
-from springsim.implicit.pattern import build_block_pattern
+from springsim.implicit.jacobian import assemble_diagonal_and_terms, assemble_system
+from springsim.implicit.pattern import build_block_pattern, build_solve_layout
+from springsim.implicit.spring_terms import spring_terms_like
 from springsim.integrators import get_integrator
 from springsim.integrators.implicit_euler import backward_euler_step, workspace
 from springsim.presets import preset
@@ -134,6 +136,42 @@ def test_cg_meets_the_requested_residual_and_agrees_with_a_direct_solve(toleranc
     assert np.all(u[kind == PINNED] == 0.0)
     direct = scipy.sparse.linalg.spsolve(matrix[free][:, free].tocsc(), b.ravel()[free])
     assert np.linalg.norm(u.ravel()[free] - direct) <= 10 * tolerance * np.linalg.norm(direct)
+
+
+def test_the_fused_search_product_is_the_filtered_product_of_the_assembled_matrix():
+    """cg.search_product makes c = s + beta c and q = S A c from the diagonal blocks and the
+    springs' terms in three passes: the same as the full assembled
+    matrix (SciPy) times c, filtered, to rounding; and it returns c . q."""
+    simulation = stiff_cube(pinned=(0, 8))
+    perturb(simulation, seed=11, squeeze=0.9, jitter=0.05)
+    arrays, x = simulation.model.arrays, simulation.positions
+    count = simulation.model.particle_count
+    layout = build_solve_layout(arrays)
+    assert len(layout.runs) > 0   # the fused path
+    blocks = np.empty((count, 3, 3))
+    terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
+    assemble_diagonal_and_terms(arrays, layout.diagonal, x, 1.0, H, H * H, blocks, terms)
+    full = build_block_pattern(arrays)
+    full_blocks = np.empty((full.block_count, 3, 3))
+    assemble_system(arrays, full, x, 1.0, H, H * H, full_blocks)
+    matrix = scipy.sparse.bsr_matrix((full_blocks, full.column, full.row_start)).tocsr()
+
+    rng = np.random.default_rng(12)
+    kind = np.where(simulation.model.pinned, PINNED, FREE).astype(np.int8)
+    kind[[3, 13]] = CONTACT
+    normal = np.zeros((count, 3))
+    normal[[3, 13]] = (0.0, 1.0, 0.0)
+    s, c = rng.standard_normal((count, 3)), rng.standard_normal((count, 3))
+    q = np.empty((count, 3))
+    expected_c = s + 0.7 * c
+    curvature = search_product(layout.diagonal, blocks, terms, no_ball_contacts(), kind, normal,
+                               s, 0.7, c, q)
+    expected_q = (matrix @ expected_c.ravel()).reshape(-1, 3)
+    expected_q[kind == PINNED] = 0.0
+    expected_q[kind == CONTACT, 1] = 0.0
+    assert np.allclose(c, expected_c, rtol=0, atol=1e-15)   # to rounding (fused multiply-add)
+    assert np.allclose(q, expected_q, rtol=0, atol=1e-12 * np.abs(matrix).max())
+    assert curvature == pytest.approx(np.sum(c * q), rel=1e-12)
 
 
 def test_cg_leaves_the_normal_components_of_contacts_where_they_start():

@@ -39,7 +39,8 @@ from .._jit import kernel
 from .ball_contact import add_contact_blocks, add_contact_product, no_ball_contacts
 from .constraints import filter_constrained, filtered
 from .jacobian import block_multiply
-from .spring_terms import add_spring_products, no_spring_terms, spring_terms_trace
+from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
+                           no_spring_terms, spring_terms_trace)
 
 # N s: a reference below this is zero (nothing to solve); its square would underflow the goal
 MIN_REFERENCE = 1e-150
@@ -124,22 +125,57 @@ def contact_cg(pattern, blocks, terms, contacts, b, kind, normal, u, tolerance, 
     precondition(inverse, r, s)
     filter_constrained(kind, normal, s)
     c[:] = s
+    beta = 0.0   # the first direction is s itself
     delta = dot(r, s)
     for iteration in range(max_iterations):
         if not residual_squared > goal:   # also stops on NaN, which the divergence check reports
             return iteration, reference
-        system_multiply(pattern, blocks, terms, contacts, c, q)
-        curvature = filter_and_dot(kind, normal, q, c)
+        curvature = search_product(pattern, blocks, terms, contacts, kind, normal, s, beta, c, q)
         if not curvature > 0.0:
             return iteration, reference
         delta_new, residual_squared = cg_update(kind, normal, inverse, delta / curvature, c, q,
                                                 u, r, s)
         beta = delta_new / delta
         delta = delta_new
-        for i in range(u.shape[0]):
+    return max_iterations, reference
+
+
+@kernel
+def search_product(pattern, blocks, terms, contacts, kind, normal, s, beta, c, q):
+    """The new search direction c = s + beta c and its filtered product q = S A c; returns c . q.
+
+    With only the diagonal blocks stored (block i in slot i) and the springs in runs, in three
+    passes over the particles rather than five: c is made while it is copied into the springs'
+    columns, with the diagonal blocks' product as the start of the sum (spring_terms.py), and q
+    is filtered and dotted while it is copied out. The same sums as system_multiply and
+    filter_and_dot, added in another order."""
+    runs, run_coefficients, loose_pairs, loose_coefficients, columns = terms
+    count = s.shape[0]
+    if pattern.column.shape[0] != count or runs.shape[0] == 0:
+        for i in range(count):
             for k in range(3):
                 c[i, k] = s[i, k] + beta * c[i, k]
-    return max_iterations, reference
+        system_multiply(pattern, blocks, terms, contacts, c, q)
+        return filter_and_dot(kind, normal, q, c)
+    for i in range(count):
+        c0, c1, c2 = s[i, 0] + beta * c[i, 0], s[i, 1] + beta * c[i, 1], s[i, 2] + beta * c[i, 2]
+        c[i, 0], c[i, 1], c[i, 2] = c0, c1, c2
+        columns[0, i], columns[1, i], columns[2, i] = c0, c1, c2
+        columns[3, i] = blocks[i, 0, 0] * c0 + blocks[i, 0, 1] * c1 + blocks[i, 0, 2] * c2
+        columns[4, i] = blocks[i, 1, 0] * c0 + blocks[i, 1, 1] * c1 + blocks[i, 1, 2] * c2
+        columns[5, i] = blocks[i, 2, 0] * c0 + blocks[i, 2, 1] * c1 + blocks[i, 2, 2] * c2
+    add_run_products(runs, run_coefficients, columns)
+    # particles as rows again, for the scattered pairs: views of the same columns
+    direction, product = columns[0:3].T, columns[3:6].T
+    add_loose_products(loose_pairs, loose_coefficients, direction, product)
+    add_contact_product(contacts, direction, product)
+    total = 0.0
+    for i in range(count):
+        q0, q1, q2 = filtered(kind[i], normal[i, 0], normal[i, 1], normal[i, 2], columns[3, i],
+                              columns[4, i], columns[5, i])
+        q[i, 0], q[i, 1], q[i, 2] = q0, q1, q2
+        total += c[i, 0] * q0 + c[i, 1] * q1 + c[i, 2] * q2
+    return total
 
 
 @kernel

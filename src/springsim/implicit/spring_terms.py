@@ -46,20 +46,33 @@ def add_spring_products(terms, u, out):
             for c in range(3):
                 columns[c, i] = u[i, c]
                 columns[3 + c, i] = 0.0
-        for tile in range(0, u.shape[0], TILE):
-            for r in range(runs.shape[0]):
-                first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
-                low, high = max(first, tile), min(first + count, tile + TILE)
-                if low < high:
-                    add_stretch_products(columns, low, low + offset, high - low,
-                                         run_coefficients, start + low - first)
+        add_run_products(runs, run_coefficients, columns)
         for i in range(u.shape[0]):
             for c in range(3):
                 out[i, c] += columns[3 + c, i]
+    add_loose_products(loose_pairs, loose_coefficients, u, out)
+
+
+@kernel
+def add_run_products(runs, coefficients, columns):
+    """Rows 3-5 of the columns += the run springs' off-diagonal blocks times rows 0-2, tile by
+    tile."""
+    for tile in range(0, columns.shape[1], TILE):
+        for r in range(runs.shape[0]):
+            first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+            low, high = max(first, tile), min(first + count, tile + TILE)
+            if low < high:
+                add_stretch_products(columns, low, low + offset, high - low, coefficients,
+                                     start + low - first)
+
+
+@kernel
+def add_loose_products(loose_pairs, coefficients, u, out):
+    """out += the loose springs' off-diagonal blocks times u."""
     for k in range(loose_pairs.shape[0]):
         a, b = loose_pairs[k, 0], loose_pairs[k, 1]
-        p, q = loose_coefficients[0, k], loose_coefficients[1, k]
-        l0, l1, l2 = loose_coefficients[2, k], loose_coefficients[3, k], loose_coefficients[4, k]
+        p, q = coefficients[0, k], coefficients[1, k]
+        l0, l1, l2 = coefficients[2, k], coefficients[3, k], coefficients[4, k]
         lu_a = l0 * u[a, 0] + l1 * u[a, 1] + l2 * u[a, 2]
         lu_b = l0 * u[b, 0] + l1 * u[b, 1] + l2 * u[b, 2]
         out[a, 0] -= p * lu_b * l0 + q * u[b, 0]
