@@ -8,9 +8,6 @@ show polyscope structures, and its energy plot's total is the sum of the recorde
 virtual display (Xvfb) `springsim play` opens a GLFW window whose screenshot shows the panel and
 the orange cube.
 """
-import os
-import subprocess
-import sys
 
 import imageio.v3 as iio
 import numpy as np
@@ -142,23 +139,10 @@ def test_play_refuses_a_bad_speed_and_a_missing_file(take_path, capsys, tmp_path
 
 
 def test_play_opens_a_window_under_a_virtual_display(take_path, tmp_path):
-    from test_window_xvfb import start_xvfb
+    from test_window_xvfb import window_screenshot
 
-    server, display = start_xvfb()
-    try:
-        screenshot = tmp_path / "play.png"
-        result = subprocess.run(
-            [sys.executable, "-m", "springsim", "play", str(take_path), "--frames", "10",
-             "--width", "800", "--height", "500", "--screenshot", str(screenshot)],
-            env={**os.environ, "DISPLAY": display}, cwd=tmp_path, capture_output=True,
-            text=True, timeout=180)
-    finally:
-        server.terminate()
-        server.wait(timeout=30)
-    assert result.returncode == 0, result.stderr
-    assert "openGL3_glfw" in result.stdout
-    picture = iio.imread(screenshot)[..., :3].astype(int)
-    assert picture.shape == (500, 800, 3)
+    picture = window_screenshot(["play", str(take_path), "--frames", "10"], tmp_path,
+                                width=800, height=500)
     assert np.all(picture[:, :300] < 90, axis=-1).mean() > 0.2        # the panel
     scene = picture[:, 360:]
     assert ((scene[..., 0] > 150) & (scene[..., 0] - scene[..., 2] > 60)).mean() > 0.01

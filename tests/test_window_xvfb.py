@@ -38,23 +38,30 @@ def start_xvfb():
     return server, f":{display}"
 
 
-def test_view_opens_a_window_and_takes_a_screenshot(tmp_path):
+def window_screenshot(arguments, tmp_path, width=WIDTH, height=HEIGHT):
+    """Run ``springsim ARGUMENTS --width --height --screenshot`` on a virtual display; checks
+    that it opened a real GLFW window and returns its screenshot (height, width, 3) as ints."""
     server, display = start_xvfb()
+    screenshot = tmp_path / "window.png"
     try:
-        screenshot = tmp_path / "window.png"
-        environment = {**os.environ, "DISPLAY": display}
         result = subprocess.run(
-            [sys.executable, "-m", "springsim", "view", "jelly-plane", "--start", "--frames",
-             "20", "--width", str(WIDTH), "--height", str(HEIGHT), "--screenshot",
-             str(screenshot), "--record-folder", str(tmp_path)],
-            env=environment, cwd=tmp_path, capture_output=True, text=True, timeout=180)
+            [sys.executable, "-m", "springsim", *arguments, "--width", str(width), "--height",
+             str(height), "--screenshot", str(screenshot)],
+            env={**os.environ, "DISPLAY": display}, cwd=tmp_path, capture_output=True,
+            text=True, timeout=180)
     finally:
         server.terminate()
         server.wait(timeout=30)
     assert result.returncode == 0, result.stderr
     assert "openGL3_glfw" in result.stdout
     picture = iio.imread(screenshot)[..., :3].astype(int)
-    assert picture.shape == (HEIGHT, WIDTH, 3)
+    assert picture.shape == (height, width, 3)
+    return picture
+
+
+def test_view_opens_a_window_and_takes_a_screenshot(tmp_path):
+    picture = window_screenshot(["view", "jelly-plane", "--start", "--frames", "20",
+                                 "--record-folder", str(tmp_path)], tmp_path)
     panel, scene = picture[:, :300], picture[:, 360:]
     dark = np.all(panel < 90, axis=-1)
     assert dark.mean() > 0.2                                # ImGui's dark panel

@@ -23,8 +23,15 @@ concurrent.futures:
   code that runs on Slurm, PBS, SSH or Kubernetes (any deployment that gives a scheduler address).
   joblib's dask backend would be one more layer over the same client and gives none of the above.
 
-The price is about two seconds to start a local cluster. Workers have one thread each: the runs
-are CPU-bound compiled loops, so one process per core is what uses every core.
+Starting a local cluster costs about half a second: its worker processes are forked from a
+fork server that has imported springsim, NumPy, Numba and distributed once (``forkserver``
+with a preload, where the platform has it), where Dask's default (``spawn``) makes every worker
+import them from scratch, about two seconds on two cores (benchmarks/sweep_scaling.py measures
+it as the "fixed cost"). A fork server starts from a clean, single-threaded process, unlike
+``fork`` of the parent (whose client threads a fork would copy mid-flight), and its workers load
+the compiled kernels from the disk cache as a remote Dask worker does, so local and cluster
+results stay the same bit for bit. Workers have one thread each: the runs are CPU-bound compiled
+loops, so one process per core is what uses every core.
 
 Compiled kernels are cached on disk (``springsim._jit``); ``warm_kernels`` compiles them in the
 parent before fanning out, so that local workers load them instead of each compiling its own. A
@@ -44,6 +51,8 @@ CONNECT_TIMEOUT = "10s"     # to reach a remote scheduler
 # so a worker that dies is blamed on its own run only.
 LOCAL_SCHEDULER = {"distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
                    "distributed.scheduler.worker-saturation": 1.0}
+# What the fork server imports once for every local worker (module doc)
+WORKER_PRELOAD = ["distributed", "springsim.sweeps.run"]
 
 
 class WorkerLost(RuntimeError):
@@ -106,7 +115,7 @@ class Runner:
             if self.address:
                 self.client = self._stack.enter_context(_connect(Client, self.address))
             else:
-                with dask.config.set(LOCAL_SCHEDULER):
+                with dask.config.set({**LOCAL_SCHEDULER, **_fork_server()}):
                     cluster = self._stack.enter_context(LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
                         dashboard_address=None, silence_logs=logging.CRITICAL,
@@ -157,6 +166,22 @@ def _outcome(index: int, future) -> Outcome:
                                                "memory) on every try"))
     except Exception as error:   # noqa: BLE001 - the task's own error, for the caller to judge
         return Outcome(index, error=error)
+
+
+def _fork_server() -> dict:
+    """The Dask setting that starts local workers from a fork server preloaded with springsim
+    (module doc), or nothing where the platform has no fork server (Windows)."""
+    import multiprocessing
+
+    import dask
+    from distributed.utils import get_mp_context
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return {}
+    method = {"distributed.worker.multiprocessing-method": "forkserver"}
+    with dask.config.set(method):
+        get_mp_context().set_forkserver_preload(WORKER_PRELOAD)   # after Dask sets its own
+    return method
 
 
 def check_scheduler(address: str | None) -> None:

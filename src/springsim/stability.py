@@ -92,7 +92,8 @@ def find_stability_limit(make_scene, integrator: str, *, seconds: float = 3.0,
     """Bracket and bisect the largest stable dt (module doc). ``on_trial(trial)`` is called
     after every trial, for progress output."""
     require(seconds > 0 and math.isfinite(seconds), "seconds", seconds, "must be > 0 s")
-    require(max_dt > MIN_DT and math.isfinite(max_dt), "max_dt", max_dt, f"must be > {MIN_DT} s")
+    require(max_dt > MIN_DT and math.isfinite(max_dt), "max_dt", max_dt,
+            f"must be a finite step > {MIN_DT:g} s")
     require(0 < tolerance < 1, "tolerance", tolerance, "must lie in (0, 1)")
     trials = []
 
