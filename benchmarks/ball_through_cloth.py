@@ -9,9 +9,9 @@ middle of an edge and at the centre of a cell; 0.6 s each. A ball goes through w
 ever ends a step below the cloth's surface at its (x, z) (the height of the surface triangle
 under it) or below the lowest cloth particle within its radius plus a spacing horizontally.
 
-Measured 2026-11-23: 0 of the 81 go through. Before the fix, 68 of the 81 went through; only balls aimed at a particle
-at the smaller steps stay on the cloth. Why: the solve's contacts pair a ball with particles
-only. A ball over a cell touches its four corners at 0.118 m horizontally, so once its centre
+Measured 2026-11-23: 0 of the 81 go through. Before the fix, 68 of the 81 went through; only
+balls aimed at a particle at the smaller steps stayed on the cloth. Why: the solve's contacts
+paired a ball with particles only. A ball over a cell touches its four corners at 0.118 m horizontally, so once its centre
 sinks to their level the contact normals are horizontal: they push the corners apart instead
 of holding the ball up, and it slips through the cell. (The first Newton iteration also takes
 the normal at the free-flight prediction x + h v, which already has the centre at the cloth's
