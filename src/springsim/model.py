@@ -44,6 +44,11 @@ class ModelArrays(NamedTuple):
     particle_restitution: np.ndarray = np.empty(0)            # (B,) ball-particle
     particle_friction: np.ndarray = np.empty(0)               # (B,) ball-particle Coulomb friction
     position_correction: np.ndarray = np.empty(0)             # (B,) share of a penetration removed
+    # Sheets (bodies that are all surface: cloth): their triangles, which balls touch as surfaces
+    # in implicit_euler's solve (implicit/ball_contact.py), and each particle's triangles
+    sheet_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T, 3) particle numbers
+    triangle_start: np.ndarray = np.zeros(1, np.int64)        # (P + 1,) into particle_triangles
+    particle_triangles: np.ndarray = np.empty(0, np.int64)    # (3T,) rows of sheet_triangles
 
 
 @dataclass(frozen=True)
@@ -125,7 +130,8 @@ def build_model(scene) -> Model:
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
-        **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius))
+        **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius),
+        **sheet_arrays(built, offsets))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])
@@ -150,6 +156,22 @@ def particle_drag(scene, built) -> np.ndarray:
     the reference's 3.4e-4; a body without a ``drag`` setting adds nothing)."""
     return np.concatenate([np.full(len(b.masses), scene.drag + getattr(spec, "drag", 0.0), float)
                            for spec, b in zip(scene.bodies, built)])
+
+
+def sheet_arrays(built, offsets) -> dict:
+    """The sheets' triangles in global particle numbers, and each particle's triangles (CSR): a
+    sheet is a body whose surface is its particles themselves (no embedding) and holds every
+    one of them, as a cloth's does (a cube's interior is not on its surface)."""
+    triangles = [b.surface.astype(np.int64) + start for b, start in zip(built, offsets)
+                 if b.embedding is None and len(b.surface)
+                 and np.unique(b.surface).size == len(b.masses)]
+    triangles = np.concatenate(triangles) if triangles else np.empty((0, 3), np.int64)
+    corners = triangles.ravel()
+    order = np.argsort(corners, kind="stable")
+    counts = np.bincount(corners, minlength=int(offsets[-1]))
+    return {"sheet_triangles": triangles,
+            "triangle_start": np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+            "particle_triangles": (order // 3).astype(np.int64)}
 
 
 def collision_arrays(specs, built, radius) -> dict:

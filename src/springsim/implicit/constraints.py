@@ -29,7 +29,9 @@ Contact, as contact.py does it but for a whole implicit step:
   contact whose normal impulse lambda_n = R . n is negative is released (the terrain can push,
   not pull), c is recomputed, and a free particle that the solved velocities carry into a
   terrain becomes a contact. Contacts and their c carry over to the next step as its first
-  guess, so a body at rest or sliding steadily needs one solve a step.
+  guess, so a body at rest or sliding steadily needs one solve a step; a carried c that would
+  give the step's starting velocity more than the Coulomb impulse (a held body set sliding) is
+  lowered to it first (``remembered_friction_in_cone``).
 - Restitution is left to the impact pass every integrator runs after its step
   (``_steps.finish_step``), which reflects whatever normal velocity still approaches a terrain.
   A contact that the floor slowed down (an impact: it came in faster than the floor allows) ends
@@ -179,6 +181,40 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, v, dv, friction
     for r in range(3):
         for c in range(3):
             blocks[slot, r, c] += change * ((1.0 if r == c else 0.0) - n[r] * n[c])
+
+
+@kernel
+def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, normal, v, dv,
+                                ddv, damping):
+    """The friction damper c that contact i carries over from the last step, lowered where it
+    would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
+    the step starts from. Without this a contact that friction held at rest (c = Coulomb /
+    SLIP_SPEED) and is then set sliding (a push, a kick, a velocity given between steps) starts
+    the solve with a friction impulse c |u_t| millions of times Coulomb's: the first solve stops
+    the body, tips it over its leading edge, and leaves a right-hand side so large that the
+    re-solves after the friction update meet their tolerance without an iteration (the cube
+    given 3 m/s on the plane lost 10 times Coulomb's impulse in that step).
+
+    lambda_n is estimated as ``coulomb_damping`` estimates slip, as if the rest of the system
+    stayed put: the reaction n . (A_ii ddv_i - b_i) of the particle's own block, with ddv_i the
+    velocity change that holds it on its floor (``hold_constrained``) and no friction in A_ii
+    or b_i yet. For a resting or steadily sliding contact it is the load it carries (the
+    springs and gravity in b), and the cap leaves c as it was."""
+    if kind[i] != CONTACT or damping == 0.0:
+        return damping
+    nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
+    u_n = u0 * nx + u1 * ny + u2 * nz
+    slip = math.sqrt((u0 - u_n * nx) ** 2 + (u1 - u_n * ny) ** 2 + (u2 - u_n * nz) ** 2)
+    slot = pattern.diagonal_slot[i]
+    impulse_n = -(rhs[i, 0] * nx + rhs[i, 1] * ny + rhs[i, 2] * nz)
+    for r in range(3):
+        for c in range(3):
+            impulse_n += normal[i, r] * blocks[slot, r, c] * ddv[i, c]
+    coulomb = model.terrain_friction[terrain[i]] * max(impulse_n, 0.0)
+    if damping * slip > coulomb:
+        return coulomb / slip
+    return damping
 
 
 @kernel

@@ -33,7 +33,8 @@ from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts
                                      newton_iterations_needed, update_ball_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
-                                    restore_impact_speeds, set_friction_damping, update_contacts)
+                                    remembered_friction_in_cone, restore_impact_speeds,
+                                    set_friction_damping, update_contacts)
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
@@ -108,6 +109,9 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
             hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
             damping = friction_damping[i]   # the fresh matrix has none yet
             friction_damping[i] = 0.0
+            if newton == 0:   # carried from the last step: back inside the friction cone
+                damping = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind,
+                                                      terrain, normal, v, dv, ddv, damping)
             set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
                                  friction_damping)
         iterations, solves = solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v,
