@@ -29,6 +29,7 @@ ROWS = {
     "implicit-30": ("jelly-plane", "implicit_euler", 0.033333, [], 1, "--seconds", "3"),
     "cloth-rk4": ("cloth-balls", "rk4", 0.0001, [], 1, "--seconds", "3"),
     "cloth-explicit": ("cloth-balls", "explicit_euler", 0.0001, [], 1, "--seconds", "3"),
+    "cloth-implicit": ("cloth-balls", "implicit_euler", 0.016667, [], 1, "--seconds", "3"),
     "cloth-100-rk4": ("cloth-balls-100", "rk4", 0.0001, [], 1, "--seconds", "3"),
     "cloth-hang-100": ("cloth-hang", "implicit_euler", 0.016667, CLOTH_100, 1, "--seconds", "3"),
     "cloth-hang-200": ("cloth-hang", "implicit_euler", 0.016667, CLOTH_200, 1, "--steps", "20"),

@@ -6,15 +6,42 @@ whether the results agree bit for bit.
 Builds the cube of ``--edge`` particles per edge on the plane once, then alternates timed calls
 of ``--steps`` steps with each thread count from the same start (so the machine's drift hits
 both alike), and reports the best of ``--repeats`` for each and their ratio.
+
+The control line times a memory-bound loop (a[i] = b[i] + s c[i] over arrays the size of the
+model's positions, the STREAM triad) with the same thread counts: where more threads do not
+speed it up, the machine's memory bandwidth is shared by its cores, and a step that streams its
+arrays cannot scale with threads either.
 """
 import argparse
 import time
 
+import numba
 import numpy as np
 
 from springsim.integrators import available_threads
 from springsim.scenefile import load_scene
 from springsim.simulation import Simulation
+
+
+@numba.njit(parallel=True)
+def triad(a, b, c, scale):
+    for i in numba.prange(a.shape[0]):
+        a[i] = b[i] + scale * c[i]
+
+
+def bandwidth(size, counts, repeats=10):
+    """Best seconds of one triad over ``size`` float64s, for each thread count."""
+    a, b, c = np.zeros(size), np.ones(size), np.ones(size)
+    best = {count: np.inf for count in counts}
+    for _ in range(repeats):
+        for count in counts:
+            numba.set_num_threads(count)
+            triad(a, b, c, 2.0)   # the first call compiles
+            began = time.perf_counter()
+            triad(a, b, c, 2.0)
+            best[count] = min(best[count], time.perf_counter() - began)
+    numba.set_num_threads(max(counts))
+    return best
 
 
 def main():
@@ -49,6 +76,13 @@ def main():
         print(f"  {count} thread(s): {1000 * best[count]:8.1f} ms/step, "
               f"{best[counts[0]] / best[count]:.2f}x of {counts[0]} thread(s), "
               f"bit-identical: {same}")
+    size = 3 * simulation.model.particle_count
+    control = bandwidth(size, counts)
+    print(f"control, memory-bound triad over {size:,} float64s (3 arrays):")
+    for count in counts:
+        rate = 3 * 8 * size / control[count] / 1e9
+        print(f"  {count} thread(s): {1000 * control[count]:8.2f} ms, {rate:5.1f} GB/s, "
+              f"{control[counts[0]] / control[count]:.2f}x of {counts[0]} thread(s)")
 
 
 if __name__ == "__main__":

@@ -15,23 +15,26 @@ from .errors import SceneError
 
 
 class ContactMemory(NamedTuple):
-    """Per-particle contacts that implicit_euler carries between steps (implicit/constraints.py)."""
+    """Per-particle contacts that implicit_euler carries between steps (implicit/constraints.py),
+    and its last velocity change, the next solve's first guess."""
 
     kind: np.ndarray              # (P,) int8: free, pinned or in contact
     terrain: np.ndarray           # (P,) int64: the terrain touched, or -1
     normal_floor: np.ndarray      # (P,) m/s: the lowest normal velocity the contact allows
     friction_damping: np.ndarray  # (P,) friction carried into the next step's matrix
+    velocity_change: np.ndarray   # (P, 3) m/s: the last step's v_new - v
 
     @classmethod
     def empty(cls, count: int) -> "ContactMemory":
         return cls(np.zeros(count, np.int8), np.full(count, -1, np.int64), np.zeros(count),
-                   np.zeros(count))
+                   np.zeros(count), np.zeros((count, 3)))
 
     def copy(self) -> "ContactMemory":
         return ContactMemory(*(array.copy() for array in self))
 
 
-CONTACT_DTYPES = ContactMemory(np.int8, np.int64, np.float64, np.float64)
+CONTACT_DTYPES = ContactMemory(np.int8, np.int64, np.float64, np.float64, np.float64)
+CONTACT_COLUMNS = ContactMemory((), (), (), (), (3,))   # each field's shape after (P,)
 
 
 @dataclass
@@ -65,8 +68,9 @@ class State:
         if not (isinstance(contacts, tuple) and len(contacts) == len(CONTACT_DTYPES)):
             raise SceneError("state.contacts", type(contacts).__name__,
                              "must be a state.ContactMemory")
-        wanted += [(f"contacts.{name}", array, (particle_count,), dtype)
-                   for name, array, dtype in zip(ContactMemory._fields, contacts, CONTACT_DTYPES)]
+        wanted += [(f"contacts.{name}", array, (particle_count,) + columns, dtype)
+                   for name, array, dtype, columns in zip(ContactMemory._fields, contacts,
+                                                          CONTACT_DTYPES, CONTACT_COLUMNS)]
         for name, array, shape, dtype in wanted:
             if not (isinstance(array, np.ndarray) and array.shape == shape
                     and array.dtype == dtype and array.flags.c_contiguous

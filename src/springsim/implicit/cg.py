@@ -179,30 +179,51 @@ def search_product(pattern, blocks, terms, contacts, kind, normal, s, beta, c, q
 
 
 @kernel
-def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, u, r, s, q):
-    """u += alpha S M^-1 r, r = S (b - A u), with the alpha that lowers the error's A-norm most
-    (none if that direction has no curvature). r, s, q are work arrays.
+def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, guess, u, r, s,
+               q):
+    """u += alpha_1 S guess, then u += alpha_2 S M^-1 r, r = S (b - A u), each alpha the one
+    that lowers the error's A-norm most along its direction (none if the direction has no
+    curvature). An all-zero guess is skipped. r, s, q are work arrays.
 
-    Why: the block-Jacobi preconditioner divides by the springs' stiffness too, so a smooth load
-    (gravity on a falling body: every particle's velocity changes by h g) takes conjugate
-    gradients as many iterations as the load takes to cross the body, one neighbour per
-    iteration. M^-1 r is the velocity change the load gives when the springs do not resist it,
-    exact for a uniform one: a falling 30^3 cube's solve needs 2 iterations after it instead of
-    27 (benchmarks/implicit_scale.py). A step along it is never worse than none."""
+    Why M^-1 r: the block-Jacobi preconditioner divides by the springs' stiffness too, so a
+    smooth load (gravity on a falling body: every particle's velocity changes by h g) takes
+    conjugate gradients as many iterations as the load takes to cross the body, one neighbour
+    per iteration. M^-1 r is the velocity change the load gives when the springs do not resist
+    it, exact for a uniform one: a falling 30^3 cube's solve needs 2 iterations after it
+    instead of 27 (benchmarks/implicit_scale.py).
+    Why a guess (the last step's velocity change): under a steady load consecutive steps change
+    the velocities alike. Taken as a direction with its best length, not as the start itself, it
+    is never worse than none: a resting cube's last change is round-off, which as a start cost
+    3.6 more iterations a step."""
     system_multiply(pattern, blocks, terms, contacts, u, q)
     for i in range(u.shape[0]):
         for k in range(3):
             r[i, k] = b[i, k] - q[i, k]
-            s[i, k] = inverse_mass[i] * r[i, k]
     filter_constrained(kind, normal, r)
+    if dot(guess, guess) > 0.0:
+        s[:] = guess
+        filter_constrained(kind, normal, s)
+        step_along(pattern, blocks, terms, contacts, kind, normal, u, r, s, q)
+    for i in range(u.shape[0]):
+        for k in range(3):
+            s[i, k] = inverse_mass[i] * r[i, k]
     filter_constrained(kind, normal, s)
+    step_along(pattern, blocks, terms, contacts, kind, normal, u, r, s, q)
+
+
+@kernel
+def step_along(pattern, blocks, terms, contacts, kind, normal, u, r, s, q):
+    """u += alpha s and r -= alpha S A s, alpha = s . r / s . A s: the best step along the
+    filtered direction s for the residual r = S (b - A u) (none if s has no curvature)."""
     system_multiply(pattern, blocks, terms, contacts, s, q)
+    filter_constrained(kind, normal, q)
     curvature = dot(s, q)
     if curvature > 0.0:
         alpha = dot(s, r) / curvature
         for i in range(u.shape[0]):
             for k in range(3):
                 u[i, k] += alpha * s[i, k]
+                r[i, k] -= alpha * q[i, k]
 
 
 @kernel

@@ -60,12 +60,14 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
 
 @kernel
 def solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v, dv, h, kind, normal, terrain,
-                        normal_floor, friction_damping, ddv, tolerance, max_iterations,
+                        normal_floor, friction_damping, guess, ddv, tolerance, max_iterations,
                         reaction, r, s, c, q):
     """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
-    ball-particle contacts (implicit.ball_contact) between solves. Returns the
-    conjugate-gradient iterations taken and the number of solves."""
-    mass_start(pattern, blocks, terms, balls, rhs, kind, normal, model.inv_mass, ddv, r, s, q)
+    ball-particle contacts (implicit.ball_contact) between solves; the first solve starts
+    along ``guess`` (cg.mass_start). Returns the conjugate-gradient iterations taken and the
+    number of solves."""
+    mass_start(pattern, blocks, terms, balls, rhs, kind, normal, model.inv_mass, guess, ddv, r,
+               s, q)
     iterations, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
                                        tolerance, max_iterations, 0.0, r, s, c, q)
     conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
@@ -91,8 +93,13 @@ def solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v, dv, h, 
 
 @kernel
 def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
-                        work, kind, terrain, normal_floor, friction_damping, statistics):
-    """One step; adds its conjugate-gradient iterations and linear solves to statistics."""
+                        work, kind, terrain, normal_floor, friction_damping, last_change,
+                        statistics):
+    """One step; adds its conjugate-gradient iterations and linear solves to statistics.
+
+    The first solve starts along the last step's velocity change (last_change, kept in the
+    state; cg.mass_start says why). The solution is the same to the CG tolerance. Later Newton
+    iterations solve for a correction, for which it is no guess: they start along none."""
     blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms = work
     pattern = layout.diagonal
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
@@ -100,7 +107,9 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
+    no_guess = np.zeros((0, 3))
     for newton in range(newton_iterations_needed(model, balls, v, h, newton_iterations)):
+        guess = last_change if newton == 0 else no_guess
         assemble_diagonal_and_terms(model, pattern, x_k, 1.0, h, h * h, blocks, terms)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
         linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
@@ -116,7 +125,7 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
                                  friction_damping)
         iterations, solves = solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v,
                                                  dv, h, kind, normal, terrain, normal_floor,
-                                                 friction_damping, ddv, tolerance,
+                                                 friction_damping, guess, ddv, tolerance,
                                                  max_iterations, reaction, r, s, c, q)
         statistics[0] += iterations
         statistics[1] += solves
@@ -124,6 +133,7 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
     x[:] = x_k
+    last_change[:] = dv
     restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect
     v[:] = v_k
 
@@ -145,24 +155,25 @@ def implicit_euler_step(model, state, scratch, h):
     """backward_euler_step as the driver calls it: the state carries the contacts
     (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
     statistics."""
-    x, v, kind, terrain, normal_floor, friction_damping = state
+    x, v, kind, terrain, normal_floor, friction_damping, last_change = state
     layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
     backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
-                        work, kind, terrain, normal_floor, friction_damping, statistics)
+                        work, kind, terrain, normal_floor, friction_damping, last_change,
+                        statistics)
 
 
 @kernel
 def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_iterations,
-            kind, terrain, normal_floor, friction_damping, statistics):
+            kind, terrain, normal_floor, friction_damping, last_change, statistics):
     """Take ``steps`` steps; returns (steps done, first diverged particle or -1).
 
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
-    call) to the next; statistics[0] and [1] count the conjugate-gradient iterations and the
-    linear solves."""
+    call) to the next, last_change the velocity change; statistics[0] and [1] count the
+    conjugate-gradient iterations and the linear solves."""
     scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x),
                statistics)
     return drive(implicit_euler_step, model, (x, v, kind, terrain, normal_floor,
-                                              friction_damping), scratch, h, steps)
+                                              friction_damping, last_change), scratch, h, steps)
 
 
 @register
