@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 from springsim import SceneError, Simulation
+from springsim.errors import SimulationDiverged
 from springsim.forces import forces
 from springsim.integrators import available_threads
+from springsim.integrators._steps import DIVERGENCE_CHUNKS
 from springsim.reference import reference_forces
 from springsim.scenefile import load_scene
 from springsim.spring_runs import PARTITION, partition_count
@@ -76,3 +78,25 @@ def test_terrain_contact_is_bit_identical_for_any_number_of_threads(large_cube):
         assert np.array_equal(x, results[0][0]) and np.array_equal(v, results[0][1])
     assert results[0][0][:, 1].min() >= -1.0 - 1e-12
     assert (positions[:, 1] < -1.0).sum() > simulation.model.particle_count // 3
+
+
+@pytest.mark.parametrize("threads", sorted({1, min(2, available_threads())}))
+def test_the_first_diverged_particle_is_the_smallest_whatever_the_threads(large_cube, threads):
+    """The divergence check runs in DIVERGENCE_CHUNKS fixed pieces, on threads: with particles
+    diverging in several pieces, the one reported is the smallest index that a plain NumPy
+    check of the state after the step finds."""
+    start = large_cube.state.copy()
+    count = large_cube.model.particle_count
+    piece = -(-count // DIVERGENCE_CHUNKS)
+    large_cube.state.velocities[[5 * piece + 17, 2 * piece + 3, count - 1]] = 1e9
+    large_cube.threads = threads
+    try:
+        with pytest.raises(SimulationDiverged) as raised:
+            large_cube.step(1)
+        x, v = large_cube.state.positions, large_cube.state.velocities
+        with np.errstate(over="ignore", invalid="ignore"):
+            bad = np.flatnonzero(~((v * v).sum(axis=1) <= 1e6) | ~np.isfinite(x.sum(axis=1)))
+        assert len(np.unique(bad // piece)) >= 3   # found in several pieces
+        assert raised.value.particle == bad[0]
+    finally:
+        large_cube.state = start

@@ -31,21 +31,26 @@ import math
 
 import numpy as np
 
-from ._jit import kernel
+from numba import prange
+
+from ._jit import inline_kernel, kernel
 from .terrains import terrain_distance, terrain_looks_ahead
 
 
 BLOCK = 64   # particles whose terrain distances are looked up together (see apply_contact_forces)
 
 
-@kernel
+@inline_kernel
 def apply_contact_forces(model, x, v, h, a):
     """Cancel accelerations into touched terrains and add Coulomb friction (see module doc).
 
     With a terrain kind whose lookup is long (a mesh's grid: an index, eight loads, the
     interpolation and a square root, one after the other) the particles go a block at a time
     (apply_contact_forces_in_blocks); otherwise one by one, which is faster for short lookups
-    (blocks cost the plane about 10% in benchmarks/mesh_terrain.py). The contact arithmetic is
+    (blocks cost the plane about 10% in benchmarks/mesh_terrain.py). One by one, the particles
+    are independent, so a threaded kernel (integrators.KernelIntegrator) shares them among its
+    threads, with the same results (this is inlined for that: a kernel's loops run on threads
+    only in the kernel compiled with them); blocks run serially. The contact arithmetic is
     written out in both loops: moved into an inline kernel taking a and v, it made the plane's
     contact five times slower (28 ns a particle: references counted per call), and into a kernel
     on scalars 1.5 times."""
@@ -56,7 +61,7 @@ def apply_contact_forces(model, x, v, h, a):
     if blocks:
         apply_contact_forces_in_blocks(model, x, v, h, a)
         return
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
@@ -151,13 +156,14 @@ def coulomb_friction(ax, ay, az, tx, ty, tz, limit, h):
     return limit * sx / stick, limit * sy / stick, limit * sz / stick
 
 
-@kernel
+@inline_kernel
 def resolve_terrain_impacts(model, x, v):
-    """After a step: reflect approaching velocities with restitution, lift particles out."""
+    """After a step: reflect approaching velocities with restitution, lift particles out.
+    Particle by particle, independently: on threads in a threaded kernel (apply_contact_forces)."""
     epsilon, restitution = model.terrain_epsilon, model.terrain_restitution
     g = model.gravity
     g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):

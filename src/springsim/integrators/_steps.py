@@ -59,19 +59,37 @@ def add_scaled(out, x, alpha, y):
             out[i, c] = x[i, c] + alpha * y[i, c]
 
 
-@kernel
+DIVERGENCE_CHUNKS = 64   # fixed pieces of the divergence check, whatever the thread count
+
+
+@inline_kernel
 def first_diverged(x, v):
-    """Index of the first particle with a non-finite state or |v|^2 above the limit, else -1."""
-    for i in range(v.shape[0]):
-        speed_squared = v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2]
-        position = x[i, 0] + x[i, 1] + x[i, 2]
-        # written so that NaN fails the test: every comparison with NaN is False
-        if not (speed_squared <= SPEED_SQUARED_LIMIT and np.abs(position) < np.inf):
-            return i
+    """Index of the first particle with a non-finite state or |v|^2 above the limit, else -1.
+    Each of DIVERGENCE_CHUNKS pieces finds its own first (on threads in a threaded kernel); the
+    first piece that found one has the answer, the same for any number of threads."""
+    count = v.shape[0]
+    size = (count + DIVERGENCE_CHUNKS - 1) // DIVERGENCE_CHUNKS
+    found = np.full(DIVERGENCE_CHUNKS, -1, np.int64)
+    for chunk in prange(DIVERGENCE_CHUNKS):
+        for i in range(chunk * size, min(count, (chunk + 1) * size)):
+            if is_diverged(v[i, 0], v[i, 1], v[i, 2], x[i, 0] + x[i, 1] + x[i, 2]):
+                found[chunk] = i
+                break
+    for chunk in range(DIVERGENCE_CHUNKS):
+        if found[chunk] >= 0:
+            return found[chunk]
     return -1
 
 
 @kernel
+def is_diverged(vx, vy, vz, position):
+    """A non-finite state or |v|^2 above the limit (position: the sum of the coordinates)."""
+    speed_squared = vx * vx + vy * vy + vz * vz
+    # written so that NaN fails the test: every comparison with NaN is False
+    return not (speed_squared <= SPEED_SQUARED_LIMIT and np.abs(position) < np.inf)
+
+
+@inline_kernel
 def finish_step(model, x, v):
     """Everything after the integrator's update: terrain impacts, body-body collisions (balls),
     then the divergence check."""
