@@ -187,6 +187,25 @@ def test_a_read_only_folder_is_refused_before_the_work(tmp_path):
         f"the folder {folder} is not writable"), message
 
 
+@pytest.mark.parametrize("folder", ["/proc", "/sys"])
+def test_a_folder_that_refuses_new_files_whatever_its_permissions_is_refused_before_the_work(
+        folder, tmp_path, capsys, monkeypatch):
+    """/proc and /sys look writable to root (os.access says yes) but take no new file: the check
+    tries to make one, as the writers will, so run, export and the studies stop before any work
+    with exit 2 and one line, and write nothing."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "jelly-plane", *SMALL, "--duration", "0.05", "--quiet"]) == 0
+    capsys.readouterr()
+    commands = [["run", "jelly-plane", *SMALL, "--duration", "0.05", "--out", f"{folder}/x.npz"],
+                ["export", "jelly-plane.npz", f"{folder}/take.usd"],
+                ["stability", "--quick", "--csv", f"{folder}/s.csv"]]
+    for command in commands:
+        assert main(command) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and f"the folder {folder} is not writable" in lines[0], lines
+    assert sorted(os.listdir(tmp_path)) == ["jelly-plane.npz"]
+
+
 def test_a_long_scene_name_without_out_gets_a_shortened_file_name(capsys, tmp_path,
                                                                   monkeypatch):
     monkeypatch.chdir(tmp_path)

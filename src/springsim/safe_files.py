@@ -9,7 +9,8 @@ the new one, never half. Any error, Ctrl-C or SIGTERM (``springsim.cli`` turns i
 exception) removes the staging folder.
 
 ``check_output_path`` says up front, in one line, why a path cannot be written: a missing or
-read-only folder, a name too long for the file system, a folder where a file is wanted.
+read-only folder (tried by making a staging folder there, since permission bits say nothing to
+root), a name too long for the file system, a folder where a file is wanted.
 """
 import contextlib
 import os
@@ -36,6 +37,7 @@ def check_output_path(key: str, path, *, folder: bool = False) -> Path:
     require(parent.is_dir(), key, text, f"the folder {parent} does not exist")
     require(os.access(parent, os.W_OK | os.X_OK), key, text,
             f"the folder {parent} is not writable")
+    _probe(key, text, parent)
     longest = _limit(parent, "PC_NAME_MAX", 255)
     require(len(os.fsencode(target.name)) <= longest, key, text,
             f"the file name is {len(os.fsencode(target.name))} bytes long; this file system "
@@ -56,7 +58,18 @@ def check_output_folder(key: str, folder) -> Path:
     path = Path(os.path.abspath(text))
     require(path.is_dir(), key, text, "must be an existing folder")
     require(os.access(path, os.W_OK | os.X_OK), key, text, "is not a writable folder")
+    _probe(key, text, path)
     return path
+
+
+def _probe(key: str, text: str, folder: Path) -> None:
+    """Create and remove a staging folder in ``folder``, as the writers will: the permission
+    bits say nothing to root, and some folders refuse new entries whatever they say (/proc,
+    /sys, a read-only mount seen through a writable bind)."""
+    try:
+        os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".springsim-probe.", suffix=STAGING_SUFFIX))
+    except OSError as error:
+        require(False, key, text, f"the folder {folder} is not writable ({error.strerror})")
 
 
 class StagedOutput:
