@@ -158,23 +158,25 @@ def distance_squared(x, a, b):
 
 
 @kernel
-def closest_on_triangle(p, a, b, c):
-    """Barycentric weights of the point of triangle (a, b, c) closest to p (Ericson, Real-Time
-    Collision Detection, 5.1.5). Arguments are 3-vectors."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = np.dot(ab, ap), np.dot(ac, ap)
+def closest_on_triangle(p, corners):
+    """Barycentric weights of the point of the triangle corners[0], corners[1], corners[2]
+    closest to the 3-vector p (Ericson, Real-Time Collision Detection, 5.1.5). Written on
+    scalars: it runs for every candidate triangle in every Newton iteration, and array
+    temporaries would allocate there."""
+    a, b, c = corners[0], corners[1], corners[2]
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    ac0, ac1, ac2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    d1, d2 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - a[0], p[1] - a[1], p[2] - a[2])
     if d1 <= 0.0 and d2 <= 0.0:
         return 1.0, 0.0, 0.0
-    bp = p - b
-    d3, d4 = np.dot(ab, bp), np.dot(ac, bp)
+    d3, d4 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - b[0], p[1] - b[1], p[2] - b[2])
     if d3 >= 0.0 and d4 <= d3:
         return 0.0, 1.0, 0.0
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         t = d1 / (d1 - d3)
         return 1.0 - t, t, 0.0
-    cp = p - c
-    d5, d6 = np.dot(ab, cp), np.dot(ac, cp)
+    d5, d6 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - c[0], p[1] - c[1], p[2] - c[2])
     if d6 >= 0.0 and d5 <= d6:
         return 0.0, 0.0, 1.0
     vb = d5 * d2 - d1 * d6
@@ -193,24 +195,27 @@ def closest_on_triangle(p, a, b, c):
 
 
 @kernel
+def along_edges(ab0, ab1, ab2, ac0, ac1, ac2, q0, q1, q2):
+    """(ab . q, ac . q)."""
+    return ab0 * q0 + ab1 * q1 + ab2 * q2, ac0 * q0 + ac1 * q1 + ac2 * q2
+
+
+@kernel
 def linearize_ball_contacts(model, contacts, x, v, dv, h, rhs):
     """Weights, normals, gaps and coefficients about the estimate x + h (v + dv); activate the
     pairs with g < 0 and add their right-hand side (module doc)."""
     nodes, weights, normal, gap, coefficient, active, on_triangle = contacts
     corners = np.empty((3, 3))
+    centre, d, start = np.empty(3), np.empty(3), np.empty(3)
     for p in range(nodes.shape[0]):
         a = nodes[p, 0]
-        centre = np.empty(3)
         for c in range(3):
             centre[c] = x[a, c] + h * (v[a, c] + dv[a, c])
             for k in range(3):
                 b = nodes[p, 1 + k]
                 corners[k, c] = x[b, c] + h * (v[b, c] + dv[b, c])
         if on_triangle[p]:
-            weights[p, 0], weights[p, 1], weights[p, 2] = closest_on_triangle(
-                centre, corners[0], corners[1], corners[2])
-        d = np.empty(3)
-        start = np.empty(3)
+            weights[p, 0], weights[p, 1], weights[p, 2] = closest_on_triangle(centre, corners)
         inverse_mass = model.inv_mass[a]
         for c in range(3):
             d[c] = centre[c]
