@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .bodies.balls import collision_parameters
+from .contact_shapes import surface_contact_arrays
 from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
@@ -49,6 +50,17 @@ class ModelArrays(NamedTuple):
     sheet_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T, 3) particle numbers
     triangle_start: np.ndarray = np.zeros(1, np.int64)        # (P + 1,) into particle_triangles
     particle_triangles: np.ndarray = np.empty(0, np.int64)    # (3T,) rows of sheet_triangles
+    # Body-body contact of surfaces (contact_shapes.py, surface_collisions.py); empty when no
+    # two surfaces can touch
+    particle_body: np.ndarray = np.empty(0, np.int64)         # (P,) the body of each particle
+    surface_points: np.ndarray = np.empty(0, np.int64)        # (Q,) particles on a surface
+    surface_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T,) particle numbers
+    surface_edges: np.ndarray = np.empty((0, 2), np.int64)    # (E,) the triangles' edges
+    body_thickness: np.ndarray = np.empty(0)                  # (B,) m
+    body_self_collision: np.ndarray = np.empty(0, np.bool_)   # (B,)
+    body_friction: np.ndarray = np.empty(0)                   # (B,) kinetic Coulomb coefficient
+    body_static_friction: np.ndarray = np.empty(0)            # (B,)
+    body_restitution: np.ndarray = np.empty(0)                # (B,)
 
 
 @dataclass(frozen=True)
@@ -131,7 +143,7 @@ def build_model(scene) -> Model:
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius),
-        **sheet_arrays(built, offsets))
+        **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])

@@ -19,6 +19,7 @@ from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
 from .cube import grid_triangles
+from .surface_contact import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((0, 1), (1, 0))
 SHEAR_OFFSETS = ((1, 1), (1, -1))
@@ -36,7 +37,7 @@ def _default_springs():
 
 
 @dataclass
-class Cloth:
+class Cloth(SurfaceContact):
     """A cloth sheet. Lengths in m, masses in kg, angles in degrees, drag in N s/m."""
 
     particles_per_edge: int = 25
@@ -52,6 +53,8 @@ class Cloth:
     bend: SpringParameters = field(default_factory=_default_springs)
     pinned: str | list = "corners"         # a name in PINNINGS or a list of particle numbers
     drag: float = REFERENCE_DRAG           # added to the scene's drag on every particle
+    thickness: float = 0.02                # m, kept between this cloth and other surfaces
+    self_collision: bool = True            # the cloth does not pass through itself
 
     def validate(self, key: str) -> None:
         n = self.particles_per_edge
@@ -75,6 +78,7 @@ class Cloth:
         for kind in ("structural", "shear", "bend"):
             getattr(self, kind).validate(f"{key}.{kind}")
         self._validate_pinned(key)
+        self.validate_surface_contact(key, min(self.width, self.height) / (n - 1))
 
     def _validate_pinned(self, key: str) -> None:
         if isinstance(self.pinned, str):

@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
+from .surface_contact import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
 BEND_OFFSETS = ((2, 0, 0), (0, 2, 0), (0, 0, 2))
@@ -40,7 +41,7 @@ class LatticeSprings:
 
 
 @dataclass
-class Cube(LatticeSprings):
+class Cube(LatticeSprings, SurfaceContact):
     """A soft cube. Lengths in m, masses in kg, angles in degrees."""
 
     particles_per_edge: int = 10
@@ -76,6 +77,7 @@ class Cube(LatticeSprings):
                 self.rotation_axis, "must be a non-zero vector")
         require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
         self.validate_springs(key)
+        self.validate_surface_contact(key, self.edge_length / (n - 1))
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,

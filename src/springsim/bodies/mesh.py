@@ -33,6 +33,7 @@ from ..meshfiles import check_closed, placed, read_mesh, validate_placement
 from ..surfaces import Embedding
 from . import BuiltBody
 from .cube import LatticeSprings, lattice_pattern, spring_parameters
+from .surface_contact import SurfaceContact
 
 INSIDE_TOLERANCE = 1e-6   # of the spacing: a lattice point this close to the surface is inside
 # memory per lattice point of the bounding box while testing it (positions, distances, closest
@@ -46,7 +47,7 @@ class ThinPartsWarning(UserWarning):
 
 
 @dataclass
-class MeshBody(LatticeSprings):
+class MeshBody(LatticeSprings, SurfaceContact):
     """A jelly body filling the closed mesh in ``file``, scaled, rotated (degrees about
     ``rotation_axis``, about the file's origin) and moved by ``position`` (m); ``spacing`` (m)
     between lattice particles of ``particle_mass`` (kg); the cube's springs (LatticeSprings)."""
@@ -70,6 +71,7 @@ class MeshBody(LatticeSprings):
         require(is_finite(self.particle_mass) and self.particle_mass > 0,
                 f"{key}.particle_mass", self.particle_mass, "must be > 0 kg")
         self.validate_springs(key)
+        self.validate_surface_contact(key, self.spacing)
         mesh = self.mesh(f"{key}.file")
         volume = check_closed(mesh, f"{key}.file", self.file)
         check_memory(mesh, volume, self.spacing, f"{key}.spacing")

@@ -62,6 +62,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..broadphase import find_contacts
+from ..geometry import closest_on_triangle
 
 STIFFNESS = 100.0    # h^2 k / m_eff: a pair alone keeps 1/101 of its predicted penetration
 REACH_SLACK = 0.1    # share of the ball's radius added to the candidates' search reach
@@ -155,49 +156,6 @@ def find_ball_contacts(model, x, v, h):
 @kernel
 def distance_squared(x, a, b):
     return (x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2 + (x[a, 2] - x[b, 2]) ** 2
-
-
-@kernel
-def closest_on_triangle(p, corners):
-    """Barycentric weights of the point of the triangle corners[0], corners[1], corners[2]
-    closest to the 3-vector p (Ericson, Real-Time Collision Detection, 5.1.5). Written on
-    scalars: it runs for every candidate triangle in every Newton iteration, and array
-    temporaries would allocate there."""
-    a, b, c = corners[0], corners[1], corners[2]
-    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    ac0, ac1, ac2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
-    d1, d2 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - a[0], p[1] - a[1], p[2] - a[2])
-    if d1 <= 0.0 and d2 <= 0.0:
-        return 1.0, 0.0, 0.0
-    d3, d4 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - b[0], p[1] - b[1], p[2] - b[2])
-    if d3 >= 0.0 and d4 <= d3:
-        return 0.0, 1.0, 0.0
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        t = d1 / (d1 - d3)
-        return 1.0 - t, t, 0.0
-    d5, d6 = along_edges(ab0, ab1, ab2, ac0, ac1, ac2, p[0] - c[0], p[1] - c[1], p[2] - c[2])
-    if d6 >= 0.0 and d5 <= d6:
-        return 0.0, 0.0, 1.0
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        t = d2 / (d2 - d6)
-        return 1.0 - t, 0.0, t
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
-        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        return 0.0, 1.0 - t, t
-    denominator = va + vb + vc
-    if not denominator > 0.0:   # a degenerate triangle: its first corner
-        return 1.0, 0.0, 0.0
-    t_b, t_c = vb / denominator, vc / denominator
-    return 1.0 - t_b - t_c, t_b, t_c
-
-
-@kernel
-def along_edges(ab0, ab1, ab2, ac0, ac1, ac2, q0, q1, q2):
-    """(ab . q, ac . q)."""
-    return ab0 * q0 + ab1 * q1 + ab2 * q2, ac0 * q0 + ac1 * q1 + ac2 * q2
 
 
 @kernel

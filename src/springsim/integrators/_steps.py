@@ -21,6 +21,7 @@ from .._jit import inline_kernel, kernel
 from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
+from ..surface_collisions import resolve_surface_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -29,12 +30,25 @@ SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold,
 def drive(step, model, state, scratch, h, steps):
     """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1)."""
     x, v = state[0], state[1]
+    pairs = start_surface_pairs(model, x)
+    start = step_start(model, x)
     for done in range(steps):
+        if start.shape[0] > 0:
+            start[:] = x
         step(model, state, scratch, h)
-        particle = finish_step(model, x, v)
+        particle, pairs = finish_step(model, x, v, start, pairs)
         if particle >= 0:
             return done + 1, particle
     return steps, -1
+
+
+@kernel
+def step_start(model, x):
+    """Room for the positions at the start of a step, which surface contact reads (none
+    without it)."""
+    if model.surface_triangles.shape[0] == 0:
+        return np.empty((0, 3))
+    return np.empty_like(x)
 
 
 @kernel
@@ -90,9 +104,12 @@ def is_diverged(vx, vy, vz, position):
 
 
 @inline_kernel
-def finish_step(model, x, v):
-    """Everything after the integrator's update: terrain impacts, body-body collisions (balls),
-    then the divergence check."""
+def finish_step(model, x, v, start, pairs):
+    """Everything after the integrator's update: terrain impacts, body-body collisions (balls,
+    then surfaces, from the step's ``start`` positions and the surface pair list), then the
+    divergence check. Returns (first diverged particle or -1, the pair list for the next
+    step)."""
     resolve_terrain_impacts(model, x, v)
     resolve_body_collisions(model, x, v)
-    return first_diverged(x, v)
+    pairs = resolve_surface_contacts(model, x, v, start, pairs)
+    return first_diverged(x, v), pairs

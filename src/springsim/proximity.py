@@ -1,0 +1,209 @@
+"""Broad phase of surface contact: the (point, triangle) and (edge, edge) pairs that may touch.
+
+Every triangle's and edge's bounding box, grown by the search ``reach``, goes into a uniform grid
+whose cells are as wide as the largest grown box, so that each box lies in at most 2 x 2 x 2
+cells, whatever the shapes' sizes (the ball grid of broadphase.py is sized from the largest
+ball instead). A point looks in its one cell for the boxes that hold it; an edge looks in the cells
+its own box overlaps. The grid is rebuilt from the positions on every call, a counting sort by
+cell; the cost grows like the shapes' count, not their product.
+
+Which pairs count: a point and a triangle of which it is not a corner, of two bodies or of one
+body that collides with itself; two edges that share no particle, of two bodies or of one that
+collides with itself.
+Pairs come sorted (point, then triangle; lower edge, then higher), so the narrow phase sees them
+in one canonical order however the grid is laid out.
+"""
+import numpy as np
+
+from ._jit import kernel
+from .broadphase import MAX_CELLS_PER_PARTICLE, cell_coordinate, grid_cell_size
+
+
+@kernel
+def surface_pairs(model, x, reach):
+    """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge
+    rows, lower first)) whose boxes come within ``reach`` (m) of each other."""
+    triangles, edges = model.surface_triangles, model.surface_edges
+    triangle_boxes = shape_boxes(x, triangles, reach)
+    edge_boxes = shape_boxes(x, edges, reach)
+    points = point_triangle_pairs(model, x, triangle_boxes)
+    return points, edge_edge_pairs(model, x, edge_boxes, reach)
+
+
+@kernel
+def shape_boxes(x, shapes, reach):
+    """(N, 6) boxes (low x, y, z, high x, y, z) of the shapes (rows of particle numbers), grown
+    by ``reach`` on every side."""
+    boxes = np.empty((shapes.shape[0], 6))
+    for s in range(shapes.shape[0]):
+        for c in range(3):
+            low = high = x[shapes[s, 0], c]
+            for k in range(1, shapes.shape[1]):
+                value = x[shapes[s, k], c]
+                low, high = min(low, value), max(high, value)
+            boxes[s, c], boxes[s, 3 + c] = low - reach, high + reach
+    return boxes
+
+
+@kernel
+def box_grid(boxes):
+    """A uniform grid of the boxes: (origin, cell size, dims, cell_start, members); cell
+    (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
+    members[cell_start[c]:cell_start[c + 1]], ascending."""
+    count = boxes.shape[0]
+    origin, extent = np.zeros(3), np.zeros(3)
+    largest = 0.0
+    for c in range(3):
+        low, high = np.inf, -np.inf
+        for b in range(count):
+            low, high = min(low, boxes[b, c]), max(high, boxes[b, 3 + c])
+            largest = max(largest, boxes[b, 3 + c] - boxes[b, c])
+        if np.abs(low) < np.inf and np.abs(high) < np.inf:   # else (NaN, inf) one cell
+            origin[c], extent[c] = low, high - low
+    if not largest < np.inf:
+        largest = 1.0
+    cell = grid_cell_size(extent, largest, MAX_CELLS_PER_PARTICLE * count + 64)
+    dims = np.empty(3, np.int64)
+    for c in range(3):
+        dims[c] = int(extent[c] / cell) + 1
+    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
+    for b in range(count):
+        x0, x1, y0, y1, z0, z1 = box_cells(boxes, b, origin, cell, dims)
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                for iz in range(z0, z1 + 1):
+                    cell_start[(ix * dims[1] + iy) * dims[2] + iz + 1] += 1
+    for number in range(1, cell_start.shape[0]):
+        cell_start[number] += cell_start[number - 1]
+    cursor = cell_start[:-1].copy()
+    members = np.empty(cell_start[-1], np.int64)
+    for b in range(count):   # in box order: each cell's members ascend
+        x0, x1, y0, y1, z0, z1 = box_cells(boxes, b, origin, cell, dims)
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                for iz in range(z0, z1 + 1):
+                    number = (ix * dims[1] + iy) * dims[2] + iz
+                    members[cursor[number]] = b
+                    cursor[number] += 1
+    return origin, cell, dims, cell_start, members
+
+
+@kernel
+def box_cells(boxes, b, origin, cell, dims):
+    """The first and last cell along x, y and z that box b overlaps (at most 2 each in its own
+    grid)."""
+    return (cell_coordinate(boxes[b, 0], origin[0], cell, dims[0]),
+            cell_coordinate(boxes[b, 3], origin[0], cell, dims[0]),
+            cell_coordinate(boxes[b, 1], origin[1], cell, dims[1]),
+            cell_coordinate(boxes[b, 4], origin[1], cell, dims[1]),
+            cell_coordinate(boxes[b, 2], origin[2], cell, dims[2]),
+            cell_coordinate(boxes[b, 5], origin[2], cell, dims[2]))
+
+
+@kernel
+def point_triangle_pairs(model, x, boxes):
+    """The (point, triangle) pairs whose grown triangle box holds the point (module doc)."""
+    if model.surface_triangles.shape[0] == 0:
+        return np.empty((0, 2), np.int64)
+    grid = box_grid(boxes)
+    count = collect_point_pairs(model, x, boxes, grid, np.empty((0, 2), np.int64))
+    found = np.empty((count, 2), np.int64)
+    collect_point_pairs(model, x, boxes, grid, found)
+    return found
+
+
+@kernel
+def collect_point_pairs(model, x, boxes, grid, found):
+    """Count the pairs, writing them to ``found`` if it has room for them all."""
+    origin, cell, dims, cell_start, members = grid
+    triangles, body, self_collision = (model.surface_triangles, model.particle_body,
+                                       model.body_self_collision)
+    fill = found.shape[0] > 0
+    count = 0
+    for p in model.surface_points:
+        number = (((cell_coordinate(x[p, 0], origin[0], cell, dims[0]) * dims[1])
+                   + cell_coordinate(x[p, 1], origin[1], cell, dims[1])) * dims[2]
+                  + cell_coordinate(x[p, 2], origin[2], cell, dims[2]))
+        for k in range(cell_start[number], cell_start[number + 1]):
+            t = members[k]
+            if inside_box(boxes, t, x[p, 0], x[p, 1], x[p, 2]) \
+                    and may_touch_triangle(triangles, body, self_collision, p, t):
+                if fill:
+                    found[count, 0], found[count, 1] = p, t
+                count += 1
+    return count
+
+
+@kernel
+def inside_box(boxes, b, px, py, pz):
+    return (boxes[b, 0] <= px <= boxes[b, 3] and boxes[b, 1] <= py <= boxes[b, 4]
+            and boxes[b, 2] <= pz <= boxes[b, 5])
+
+
+@kernel
+def may_touch_triangle(triangles, body, self_collision, p, t):
+    """Whether point p and triangle t form a pair: p is not a corner, and they lie on two
+    bodies or on one that collides with itself."""
+    if p == triangles[t, 0] or p == triangles[t, 1] or p == triangles[t, 2]:
+        return False
+    return body[p] != body[triangles[t, 0]] or self_collision[body[p]]
+
+
+@kernel
+def edge_edge_pairs(model, x, boxes, reach):
+    """The (edge, edge) pairs, lower row first, that share no particle and whose boxes come
+    within ``reach`` (each box is grown by it: one grown box against the other's own)."""
+    edges = model.surface_edges
+    if edges.shape[0] == 0:
+        return np.empty((0, 2), np.int64)
+    grid = box_grid(boxes)
+    body, self_collision = model.particle_body, model.body_self_collision
+    count = collect_edge_keys(edges, body, self_collision, boxes, reach, grid,
+                              np.empty(0, np.int64))
+    keys = np.empty(count, np.int64)
+    collect_edge_keys(edges, body, self_collision, boxes, reach, grid, keys)
+    keys = np.unique(keys)   # a pair met in several cells once, sorted
+    pairs = np.empty((keys.shape[0], 2), np.int64)
+    for k in range(keys.shape[0]):
+        pairs[k, 0], pairs[k, 1] = keys[k] // edges.shape[0], keys[k] % edges.shape[0]
+    return pairs
+
+
+@kernel
+def collect_edge_keys(edges, body, self_collision, boxes, reach, grid, keys):
+    """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` if it has room for
+    them all."""
+    origin, cell, dims, cell_start, members = grid
+    fill = keys.shape[0] > 0
+    own = np.empty((1, 6))
+    count = 0
+    for e in range(edges.shape[0]):
+        for c in range(3):   # e's own box: its grown box shrunk back
+            own[0, c], own[0, 3 + c] = boxes[e, c] + reach, boxes[e, 3 + c] - reach
+        x0, x1, y0, y1, z0, z1 = box_cells(own, 0, origin, cell, dims)
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                first = (ix * dims[1] + iy) * dims[2]
+                for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
+                    f = members[k]
+                    if f > e and boxes_overlap(boxes, f, own) and no_shared_particle(edges, e, f) \
+                            and (body[edges[e, 0]] != body[edges[f, 0]]
+                                 or self_collision[body[edges[e, 0]]]):
+                        if fill:
+                            keys[count] = e * edges.shape[0] + f
+                        count += 1
+    return count
+
+
+@kernel
+def boxes_overlap(boxes, f, own):
+    for c in range(3):
+        if boxes[f, c] > own[0, 3 + c] or own[0, c] > boxes[f, 3 + c]:
+            return False
+    return True
+
+
+@kernel
+def no_shared_particle(edges, e, f):
+    return (edges[e, 0] != edges[f, 0] and edges[e, 0] != edges[f, 1]
+            and edges[e, 1] != edges[f, 0] and edges[e, 1] != edges[f, 1])

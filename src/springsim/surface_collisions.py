@@ -1,0 +1,299 @@
+"""Body-body contact of surfaces: a point of one surface against a triangle of another (or of
+its own, for a self-colliding body), and two edges of self-colliding bodies.
+
+Each contact is a stencil of four particles with signed weights c that sum to zero: the gap
+vector d = sum_i c_i x_i runs from the triangle's closest point to the point
+(c = (1, -w_0, -w_1, -w_2), w the closest point's barycentric weights) or between the closest
+points of two edges (c = (1 - s, s, -(1 - t), -t)). A contact holds while the gap g along its
+normal n is below the pair's rest distance r (the mean of the two bodies' ``thickness``).
+
+Which side: the normal points to the side the pair was on at the start of the step, so a step
+that carried a point through a triangle (or an edge past an edge) pushes it back, not through.
+A point above a triangle's face uses the face normal; one beside it (closest point on an edge or
+corner), the direction of d. The search reaches a thickness either side: a step that carries a
+point less than its thickness through a surface is always caught, and at the default time steps
+the fastest body moves a few millimetres a step against 2 to 5 cm of thickness.
+
+Response, after the integrator's step (like the ball impulses of collisions.py), in PASSES
+Jacobi passes: every contact's impulse is computed from the same velocities, then all are
+applied. With W = sum_i c_i^2 n_i / m_i, a contact approaching at v_N = n . sum_i c_i v_i < 0 gets the
+normal impulse that brings v_N to -e v_N (its first pass's), and a Coulomb friction impulse against
+the tangential velocity that sticks (stops it) while the accumulated friction stays within
+static_friction times the accumulated normal impulse, else slides with friction times it. Each
+contact's impulse is shared by its stencil, particle i getting c_i / m_i of it. n_i is how many
+contacts particle i takes part in: each contact sees 1 / n_i of its mass (mass splitting, Tonge,
+Benevolenski and Voroshilov 2012), so that contacts sharing particles do not add up to several
+times the push, and the passes converge. Then each overlap is reduced by CORRECTION of its depth
+the same way.
+Why Jacobi and not one contact after another (Gauss-Seidel): the result would depend on the
+contacts' order, so on the particle numbering, and a symmetric scene would not stay symmetric.
+Every impulse and shift acts with weights summing to zero, so momentum is conserved to rounding.
+
+The pairs come from proximity.surface_pairs, searched SKIN beyond the largest rest distance,
+and are kept while no surface particle has moved half the skin since (a Verlet list): a step
+where nothing touches costs one pass over the surface particles. A list found afresh gives the
+same contacts (the narrow phase decides), so results do not depend on when it was found.
+"""
+import math
+
+import numpy as np
+
+from ._jit import inline_kernel, kernel
+from .geometry import closest_on_segments, closest_on_triangle, triangle_normal
+from .proximity import surface_pairs
+
+PASSES = 8          # Jacobi passes of the velocity impulses per step
+CORRECTION = 0.5    # share of an overlap removed per step
+SKIN = 1.0          # the search reaches this many times the largest thickness beyond contact
+
+
+@kernel
+def surface_search(model):
+    """(reach, skin) of the pair search, m."""
+    thickest = 0.0
+    for b in range(model.body_thickness.shape[0]):
+        thickest = max(thickest, model.body_thickness[b])
+    return thickest * (1.0 + SKIN), thickest * SKIN
+
+
+@kernel
+def no_surface_pairs(model, x):
+    """The pair list of a model without surface contact (or before the first search)."""
+    return np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), np.empty((0, 3))
+
+
+@kernel
+def start_surface_pairs(model, x):
+    """The pair list for the state x: (point-triangle pairs, edge-edge pairs, positions of the
+    surface points when they were found)."""
+    if model.surface_triangles.shape[0] == 0:
+        return no_surface_pairs(model, x)
+    reach, skin = surface_search(model)
+    points, edges = surface_pairs(model, x, reach)
+    found_at = np.empty((model.surface_points.shape[0], 3))
+    for k in range(model.surface_points.shape[0]):
+        for c in range(3):
+            found_at[k, c] = x[model.surface_points[k], c]
+    return points, edges, found_at
+
+
+@kernel
+def current_surface_pairs(model, x, pairs):
+    """``pairs``, or a fresh list once a surface point has moved half the skin since."""
+    if model.surface_triangles.shape[0] == 0:
+        return pairs
+    found_at = pairs[2]
+    reach, skin = surface_search(model)
+    limit = 0.25 * skin * skin
+    for k in range(model.surface_points.shape[0]):
+        p = model.surface_points[k]
+        moved = ((x[p, 0] - found_at[k, 0]) ** 2 + (x[p, 1] - found_at[k, 1]) ** 2
+                 + (x[p, 2] - found_at[k, 2]) ** 2)
+        if not moved <= limit:   # NaN too: a fresh search copes with it
+            return start_surface_pairs(model, x)
+    return pairs
+
+
+@kernel
+def resolve_surface_contacts(model, x, v, start, pairs):
+    """Apply the contacts of the pair list to (x, v) in place (module doc); ``start`` holds the
+    positions at the start of the step. Returns the list for the next step."""
+    if model.surface_triangles.shape[0] == 0:
+        return pairs
+    pairs = current_surface_pairs(model, x, pairs)
+    contacts = surface_contacts(model, x, start, pairs[0], pairs[1])
+    if contacts[0].shape[0] > 0:
+        apply_impulses(model, v, contacts)
+        correct_overlaps(model, x, contacts)
+    return pairs
+
+
+@kernel
+def surface_contacts(model, x, start, point_pairs, edge_pairs):
+    """The touching pairs as stencils: (nodes (K, 4), weights c (K, 4), normal n (K, 3),
+    depth r - g (K,), bodies (K, 2))."""
+    capacity = point_pairs.shape[0] + edge_pairs.shape[0]
+    nodes = np.empty((capacity, 4), np.int64)
+    weights = np.empty((capacity, 4))
+    normal = np.empty((capacity, 3))
+    depth = np.empty(capacity)
+    bodies = np.empty((capacity, 2), np.int64)
+    corners = np.empty((3, 3))   # work space of closest_on_triangle
+    triangles, edges = model.surface_triangles, model.surface_edges
+    body, thickness = model.particle_body, model.body_thickness
+    count = 0
+    for k in range(point_pairs.shape[0]):
+        if point_triangle_contact(triangles, body, thickness, x, start, point_pairs[k, 0],
+                                  point_pairs[k, 1], count, nodes, weights, normal, depth,
+                                  bodies, corners):
+            count += 1
+    for k in range(edge_pairs.shape[0]):
+        if edge_edge_contact(edges, body, thickness, x, start, edge_pairs[k, 0],
+                             edge_pairs[k, 1], count, nodes, weights, normal, depth, bodies):
+            count += 1
+    return nodes[:count], weights[:count], normal[:count], depth[:count], bodies[:count]
+
+
+@inline_kernel
+def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, nodes, weights,
+                           normal, depth, bodies, corners):
+    """Fill contact ``row`` for point p and triangle t if they touch (module doc)."""
+    a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+    for i in range(3):
+        corners[0, i], corners[1, i], corners[2, i] = x[a, i], x[b, i], x[c, i]
+    w0, w1, w2 = closest_on_triangle(x[p], corners)
+    d0 = x[p, 0] - w0 * x[a, 0] - w1 * x[b, 0] - w2 * x[c, 0]
+    d1 = x[p, 1] - w0 * x[a, 1] - w1 * x[b, 1] - w2 * x[c, 1]
+    d2 = x[p, 2] - w0 * x[a, 2] - w1 * x[b, 2] - w2 * x[c, 2]
+    distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    rest = 0.5 * (thickness[body[p]] + thickness[body[a]])
+    if not distance < rest * (1.0 + SKIN):   # a point carried through: up to SKIN further
+        return False
+    if w0 > 0.0 and w1 > 0.0 and w2 > 0.0:   # above the face: the face normal, on the start side
+        n0, n1, n2 = triangle_normal(x, a, b, c)
+        s0, s1, s2 = triangle_normal(start, a, b, c)
+        side = ((start[p, 0] - w0 * start[a, 0] - w1 * start[b, 0] - w2 * start[c, 0]) * s0
+                + (start[p, 1] - w0 * start[a, 1] - w1 * start[b, 1] - w2 * start[c, 1]) * s1
+                + (start[p, 2] - w0 * start[a, 2] - w1 * start[b, 2] - w2 * start[c, 2]) * s2)
+        if side < 0.0:
+            n0, n1, n2 = -n0, -n1, -n2
+        gap = n0 * d0 + n1 * d1 + n2 * d2
+    elif distance > 0.0:
+        n0, n1, n2 = d0 / distance, d1 / distance, d2 / distance
+        gap = distance
+    else:
+        return False   # on an edge, no direction known: the faces beside it decide
+    if not gap < rest:
+        return False
+    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = p, a, b, c
+    weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -w0, -w1, -w2
+    normal[row, 0], normal[row, 1], normal[row, 2] = n0, n1, n2
+    depth[row] = rest - gap
+    bodies[row, 0], bodies[row, 1] = body[p], body[a]
+    return True
+
+
+@inline_kernel
+def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weights, normal, depth,
+                      bodies):
+    """Fill contact ``row`` for edges e and f if they touch between their ends (where an end is
+    closest, the point-triangle contacts of the faces beside it decide)."""
+    a, b, c, q = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
+    s, t = closest_on_segments(x[a], x[b], x[c], x[q])
+    if not (0.0 < s < 1.0 and 0.0 < t < 1.0):
+        return False
+    d0 = (1.0 - s) * x[a, 0] + s * x[b, 0] - (1.0 - t) * x[c, 0] - t * x[q, 0]
+    d1 = (1.0 - s) * x[a, 1] + s * x[b, 1] - (1.0 - t) * x[c, 1] - t * x[q, 1]
+    d2 = (1.0 - s) * x[a, 2] + s * x[b, 2] - (1.0 - t) * x[c, 2] - t * x[q, 2]
+    distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    rest = 0.5 * (thickness[body[a]] + thickness[body[c]])
+    if not (distance < rest and distance > 0.0):
+        return False
+    along = (d0 * ((1.0 - s) * start[a, 0] + s * start[b, 0] - (1.0 - t) * start[c, 0]
+                   - t * start[q, 0])
+             + d1 * ((1.0 - s) * start[a, 1] + s * start[b, 1] - (1.0 - t) * start[c, 1]
+                     - t * start[q, 1])
+             + d2 * ((1.0 - s) * start[a, 2] + s * start[b, 2] - (1.0 - t) * start[c, 2]
+                     - t * start[q, 2]))
+    sign = 1.0 if along >= 0.0 else -1.0   # the edges passed each other during the step: back
+    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = a, b, c, q
+    weights[row, 0], weights[row, 1] = 1.0 - s, s
+    weights[row, 2], weights[row, 3] = -(1.0 - t), -t
+    normal[row, 0] = sign * d0 / distance
+    normal[row, 1] = sign * d1 / distance
+    normal[row, 2] = sign * d2 / distance
+    depth[row] = rest - sign * distance
+    bodies[row, 0], bodies[row, 1] = body[a], body[c]
+    return True
+
+
+@kernel
+def split_mobilities(model, nodes, weights):
+    """(K,) W = sum_i c_i^2 n_i / m_i, each particle's mass split among the n_i contacts it
+    takes part in (module doc)."""
+    count = np.zeros(model.inv_mass.shape[0], np.int32)
+    for k in range(nodes.shape[0]):
+        for i in range(4):
+            count[nodes[k, i]] += 1
+    mobility = np.empty(nodes.shape[0])
+    for k in range(nodes.shape[0]):
+        total = 0.0
+        for i in range(4):
+            total += weights[k, i] ** 2 * model.inv_mass[nodes[k, i]] * count[nodes[k, i]]
+        mobility[k] = total
+    return mobility
+
+
+@kernel
+def apply_impulses(model, v, contacts):
+    """PASSES Jacobi passes of normal and friction impulses (module doc)."""
+    nodes, weights, normal, depth, bodies = contacts
+    count = nodes.shape[0]
+    mobility = split_mobilities(model, nodes, weights)
+    impulse = np.zeros((count, 3))      # this pass's, per contact
+    pushed = np.zeros(count)            # normal impulse applied so far
+    rubbed = np.zeros((count, 3))       # friction impulse applied so far
+    target = np.zeros(count)            # normal velocity wanted: -e (first approach), or 0
+    relative = np.empty(3)
+    for sweep in range(PASSES):
+        for k in range(count):
+            impulse[k, 0] = impulse[k, 1] = impulse[k, 2] = 0.0
+            if not mobility[k] > 0.0:
+                continue   # every particle of the stencil pinned
+            for c in range(3):
+                relative[c] = 0.0
+                for i in range(4):
+                    relative[c] += weights[k, i] * v[nodes[k, i], c]
+            approach = relative[0] * normal[k, 0] + relative[1] * normal[k, 1] \
+                + relative[2] * normal[k, 2]
+            if sweep == 0:
+                restitution = 0.5 * (model.body_restitution[bodies[k, 0]]
+                                     + model.body_restitution[bodies[k, 1]])
+                target[k] = -restitution * min(approach, 0.0)
+            j = max(target[k] - approach, 0.0) / mobility[k]
+            pushed[k] += j
+            friction_impulse(model, k, bodies, relative, approach, normal, mobility[k],
+                             pushed[k], rubbed, impulse)
+            for c in range(3):
+                impulse[k, c] += j * normal[k, c]
+        for k in range(count):
+            for i in range(4):
+                share = weights[k, i] * model.inv_mass[nodes[k, i]]
+                for c in range(3):
+                    v[nodes[k, i], c] += share * impulse[k, c]
+
+
+@inline_kernel
+def friction_impulse(model, k, bodies, relative, approach, normal, mobility, pushed, rubbed,
+                     impulse):
+    """Set impulse[k] to this pass's friction: the change of the accumulated friction ``rubbed``
+    that stops the sliding, kept within static_friction x ``pushed`` or else cut to
+    friction x ``pushed`` (Coulomb; ``mobility`` is the split W)."""
+    first, second = bodies[k, 0], bodies[k, 1]
+    kinetic = 0.5 * (model.body_friction[first] + model.body_friction[second])
+    static = 0.5 * (model.body_static_friction[first] + model.body_static_friction[second])
+    w0 = rubbed[k, 0] - (relative[0] - approach * normal[k, 0]) / mobility
+    w1 = rubbed[k, 1] - (relative[1] - approach * normal[k, 1]) / mobility
+    w2 = rubbed[k, 2] - (relative[2] - approach * normal[k, 2]) / mobility
+    size = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if size > static * pushed:
+        cut = kinetic * pushed / size
+        w0, w1, w2 = w0 * cut, w1 * cut, w2 * cut
+    impulse[k, 0], impulse[k, 1], impulse[k, 2] = (w0 - rubbed[k, 0], w1 - rubbed[k, 1],
+                                                   w2 - rubbed[k, 2])
+    rubbed[k, 0], rubbed[k, 1], rubbed[k, 2] = w0, w1, w2
+
+
+@kernel
+def correct_overlaps(model, x, contacts):
+    """Move each touching stencil apart by CORRECTION of its depth, shared like the impulses."""
+    nodes, weights, normal, depth, bodies = contacts
+    mobility = split_mobilities(model, nodes, weights)
+    for k in range(nodes.shape[0]):
+        if not mobility[k] > 0.0:
+            continue
+        shift = CORRECTION * depth[k] / mobility[k]
+        for i in range(4):
+            share = weights[k, i] * model.inv_mass[nodes[k, i]] * shift
+            for c in range(3):
+                x[nodes[k, i], c] += share * normal[k, c]
