@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from springsim.bodies.cloth import Cloth
 from springsim.bodies.cube import Cube
 from springsim.scene import Scene
 from springsim.springs import SpringKind, SpringParameters
@@ -133,6 +134,31 @@ def test_body_settings_rebuild_the_cube_where_geometry_puts_it():
     axis = np.array([1.0, 0.0, 1.0]) / math.sqrt(2)
     expected = Rotation.from_rotvec(math.pi / 2 * axis).apply(lattice) + (0.0, 12.0, 0.0)
     assert np.allclose(rotated, expected)
+
+
+def test_body_contact_settings_change_the_kernel_arrays_and_keep_the_state():
+    """A cloth of 5 x 5 particles 1 m apart over a cube: thickness and self-collision reach
+    the arrays the contact kernels read; a self-colliding thickness of half the spacing or more,
+    or beyond 1 m, is refused with SceneError's one line and the old simulation kept."""
+    scene = Scene(name="cloth over cube", bodies=[
+        Cube(particles_per_edge=3, position=(0.0, 1.0, 0.0)),
+        Cloth(particles_per_edge=5, position=(0.0, 6.0, 0.0))], dt=1e-4)
+    controls = Controls(scene)
+    assert [(n, name) for n, name, _ in controls.contact_bodies()] == [(0, "cube0"), (1, "cloth1")]
+    controls.step_frame()
+    before, time = controls.sim.positions.copy(), controls.sim.time
+    assert controls.set_thickness(1, 0.3) and controls.set_self_collision(0, True)
+    arrays = controls.sim.model.arrays
+    assert arrays.body_thickness.tolist() == [0.05, 0.3]
+    assert arrays.body_self_collision.tolist() == [True, True]
+    assert np.array_equal(controls.sim.positions, before) and controls.sim.time == time
+    sim = controls.sim
+    assert not controls.set_thickness(1, 0.5)            # half of the 1 m spacing
+    assert controls.sim is sim and controls.message.startswith("bodies.1.thickness = 0.5")
+    assert "\n" not in controls.message
+    assert controls.set_self_collision(1, False) and controls.set_thickness(1, 0.5)
+    assert controls.message == "" and controls.sim.model.arrays.body_thickness[1] == 0.5
+    assert not controls.set_thickness(0, 1.5) and "bodies.0.thickness" in controls.message
 
 
 def test_terrain_buttons_and_a_bad_setting_keep_the_old_simulation():

@@ -6,16 +6,23 @@ show and hide structures, a rebuilt cube is drawn with its new surface); a diver
 stops the run, shows the course's red message in the panel (red pixels appear in the screenshot)
 and the window lives on, a reset recovers; Ctrl + drag with the mouse (ImGui events, as a window
 would send them) grabs the particle under the cursor and pulls it towards the cursor; the Record
-button writes the frames shown, and its last frame is what the screen shows.
+button writes the frames shown, and its last frame is what the screen shows; the contacts toggle
+draws the contacts between two stacked cubes where they touch, and a bad thickness shows its
+message while the window lives on.
 """
 import numpy as np
 import polyscope as ps
 import polyscope.imgui as psim
 import pytest
 
+from springsim.bodies.cube import Cube
 from springsim.render import Camera, capture, start_renderer
+from springsim.render.contacts import contact_marks
+from springsim.scene import Scene
 from springsim.springs import SpringKind
+from springsim.terrains import Plane
 from springsim.viewer.controls import UNSTABLE_MESSAGE, Controls
+from springsim.viewer.panel import draw_toggles
 from springsim.viewer.window import Viewer
 
 WIDTH, HEIGHT = 480, 320
@@ -165,3 +172,51 @@ def test_record_button_writes_the_frames_on_screen_to_an_mp4(viewer, tmp_path):
     assert len(frames) == 8 and frames[-1].shape == (HEIGHT, WIDTH, 3)
     # H.264 is lossy: the last frame matches the screen to within compression noise
     assert np.abs(frames[-1].astype(int) - on_screen).mean() < 4
+
+
+def stacked_cubes() -> Scene:
+    """Two 4 m cubes of 3 x 3 x 3 particles, the upper one's bottom face 3 cm above the lower
+    one's top face (y = 4.5 m): closer than their thickness, 5 cm."""
+    return Scene(name="two cubes", terrains=[Plane()], bodies=[
+        Cube(particles_per_edge=3, position=(0.0, 2.5, 0.0)),
+        Cube(particles_per_edge=3, position=(0.0, 6.53, 0.0))])
+
+
+def run_panel_sections(viewer) -> None:
+    """One frame that builds the body-contact controls and the draw toggles (the panel keeps
+    them in a closed section) in a window of their own."""
+    c = viewer.controls
+
+    def sections():
+        psim.Begin("sections under test")
+        viewer.panel._body_contact()
+        draw_toggles(c.draw, c.sim.model.spring_kind, viewer.set_drawn, contacts=True)
+        psim.End()
+
+    ps.set_user_callback(sections)
+    viewer.run(frames=1)
+    ps.set_user_callback(viewer.frame)
+
+
+def test_contacts_toggle_draws_the_contacts_where_the_cubes_touch(viewer):
+    controls = viewer.controls
+    assert controls.choose_scene(stacked_cubes())
+    viewer.set_drawn("contacts", True)
+    viewer.run(frames=1)
+    x = controls.sim.positions
+    marks = contact_marks(controls.sim.model.arrays, x)
+    cloud = ps.get_point_cloud("contacts")
+    assert cloud.is_enabled() and cloud.n_points() == len(marks.points) > 0
+    top_of_lower = x[:27, 1].max()
+    assert np.all(np.abs(marks.points[:, 1] - top_of_lower) < 0.05)   # between the cubes
+    run_panel_sections(viewer)
+
+    sim = controls.sim
+    assert not controls.set_thickness(1, 1.5)             # beyond 1 m: refused, not a crash
+    viewer.run(frames=2)
+    assert controls.sim is sim and controls.message.startswith("bodies.1.thickness = 1.5")
+    assert controls.set_thickness(1, 0.005) and controls.message == ""
+    viewer.run(frames=1)                                  # 3 cm apart: beyond (5 + 0.5) / 2 cm
+    assert ps.get_point_cloud("contacts").n_points() == 0
+    viewer.set_drawn("contacts", False)
+    assert not ps.get_point_cloud("contacts").is_enabled()

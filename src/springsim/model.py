@@ -56,6 +56,8 @@ class ModelArrays(NamedTuple):
     surface_points: np.ndarray = np.empty(0, np.int64)        # (Q,) particles on a surface
     surface_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T,) particle numbers
     surface_edges: np.ndarray = np.empty((0, 2), np.int64)    # (E,) the triangles' edges
+    neighbour_start: np.ndarray = np.zeros(1, np.int64)       # (P + 1,) into neighbours
+    neighbours: np.ndarray = np.empty(0, np.int64)            # particles joined by a surface edge
     body_thickness: np.ndarray = np.empty(0)                  # (B,) m
     body_self_collision: np.ndarray = np.empty(0, np.bool_)   # (B,)
     body_friction: np.ndarray = np.empty(0)                   # (B,) kinetic Coulomb coefficient

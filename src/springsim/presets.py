@@ -62,6 +62,25 @@ def jelly_torus() -> Scene:
     return Scene(name="jelly-torus", bodies=[torus], terrains=[stairs], duration=6.0)
 
 
+def jelly_stack() -> Scene:
+    """Three default jelly cubes dropped onto each other on the plane, each a little off the
+    one below: they land, squash and pile up (surface contact, surface_collisions.py)."""
+    cubes = [Cube(position=(0.0, 1.3, 0.0)), Cube(position=(0.3, 6.0, 0.2)),
+             Cube(position=(-0.2, 10.7, -0.3))]
+    return Scene(name="jelly-stack", bodies=cubes, terrains=[Plane()], duration=6.0)
+
+
+def cloth_drape() -> Scene:
+    """A free 25 x 25 cloth, 4 x 4 m, dropped flat from 3 m onto a jelly cube resting on the
+    plane: it drapes over the cube, slides off its sides and folds onto itself on the floor
+    (self-collision)."""
+    cube = Cube(particles_per_edge=5, edge_length=1.6, position=(0.0, -0.2, 0.0),
+                particle_mass=2.0)
+    cloth = Cloth(position=(0.6, 2.0, 0.3), pinned="none")
+    return Scene(name="cloth-drape", bodies=[cube, cloth], terrains=[Plane()], dt=1e-4,
+                 duration=4.0)
+
+
 PRESETS = {
     "jelly-plane": (lambda: jelly("jelly-plane", Plane()),
                     "the 10^3 jelly cube dropped on the plane y = -1"),
@@ -76,6 +95,9 @@ PRESETS = {
                                  "balls; dt 1e-4"),
     "cloth-hang": (cloth_hang, "the cloth pinned along one edge, swinging down from flat"),
     "jelly-torus": (jelly_torus, "a jelly torus (a mesh body) dropped on mesh stairs"),
+    "jelly-stack": (jelly_stack, "three jelly cubes dropped onto each other: they pile up"),
+    "cloth-drape": (cloth_drape, "a cloth falls over a jelly cube and folds onto itself on the "
+                                 "floor; dt 1e-4"),
     "cloth-balls-100": (ball_rain_on_cloth, "benchmark: 100 balls falling on a 100 x 100 cloth"),
 }
 

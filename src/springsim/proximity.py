@@ -7,26 +7,30 @@ ball instead). A point looks in its one cell for the boxes that hold it; an edge
 its own box overlaps. The grid is rebuilt from the positions on every call, a counting sort by
 cell; the cost grows like the shapes' count, not their product.
 
-Which pairs count: a point and a triangle of which it is not a corner, of two bodies or of one
-body that collides with itself; two edges that share no particle, of two bodies or of one that
-collides with itself.
+Which pairs count: a point and a triangle, or two edges, of two bodies; or of one body that
+collides with itself, leaving out a point and a triangle with a corner that is the point or its
+neighbour along a surface edge, and two edges with ends that are the same or neighbours
+(contact_shapes.neighbour_arrays says why).
 Pairs come sorted (point, then triangle; lower edge, then higher), so the narrow phase sees them
 in one canonical order however the grid is laid out.
 """
+import math
+
 import numpy as np
 
 from ._jit import kernel
 from .broadphase import MAX_CELLS_PER_PARTICLE, cell_coordinate, grid_cell_size
+from .geometry import closest_on_segments, closest_on_triangle
 
 
 @kernel
 def surface_pairs(model, x, reach):
     """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge
-    rows, lower first)) whose boxes come within ``reach`` (m) of each other."""
+    rows, lower first)) closer than ``reach`` (m)."""
     triangles, edges = model.surface_triangles, model.surface_edges
     triangle_boxes = shape_boxes(x, triangles, reach)
     edge_boxes = shape_boxes(x, edges, reach)
-    points = point_triangle_pairs(model, x, triangle_boxes)
+    points = point_triangle_pairs(model, x, triangle_boxes, reach)
     return points, edge_edge_pairs(model, x, edge_boxes, reach)
 
 
@@ -101,24 +105,25 @@ def box_cells(boxes, b, origin, cell, dims):
 
 
 @kernel
-def point_triangle_pairs(model, x, boxes):
+def point_triangle_pairs(model, x, boxes, reach):
     """The (point, triangle) pairs whose grown triangle box holds the point (module doc)."""
     if model.surface_triangles.shape[0] == 0:
         return np.empty((0, 2), np.int64)
     grid = box_grid(boxes)
-    count = collect_point_pairs(model, x, boxes, grid, np.empty((0, 2), np.int64))
-    found = np.empty((count, 2), np.int64)
-    collect_point_pairs(model, x, boxes, grid, found)
-    return found
+    found = np.empty((model.surface_points.shape[0] + 64, 2), np.int64)
+    count = collect_point_pairs(model, x, boxes, reach, grid, found)
+    if count > found.shape[0]:   # a crowded step: now the count is known
+        found = np.empty((count, 2), np.int64)
+        collect_point_pairs(model, x, boxes, reach, grid, found)
+    return found[:count]
 
 
 @kernel
-def collect_point_pairs(model, x, boxes, grid, found):
-    """Count the pairs, writing them to ``found`` if it has room for them all."""
+def collect_point_pairs(model, x, boxes, reach, grid, found):
+    """Count the pairs, writing them to ``found`` while it has room."""
     origin, cell, dims, cell_start, members = grid
-    triangles, body, self_collision = (model.surface_triangles, model.particle_body,
-                                       model.body_self_collision)
-    fill = found.shape[0] > 0
+    triangles = model.surface_triangles
+    corners = np.empty((3, 3))
     count = 0
     for p in model.surface_points:
         number = (((cell_coordinate(x[p, 0], origin[0], cell, dims[0]) * dims[1])
@@ -127,8 +132,11 @@ def collect_point_pairs(model, x, boxes, grid, found):
         for k in range(cell_start[number], cell_start[number + 1]):
             t = members[k]
             if inside_box(boxes, t, x[p, 0], x[p, 1], x[p, 2]) \
-                    and may_touch_triangle(triangles, body, self_collision, p, t):
-                if fill:
+                    and may_touch_triangle(model.particle_body, model.body_self_collision,
+                                           model.neighbour_start, model.neighbours, triangles,
+                                           p, t) \
+                    and point_triangle_distance(x, triangles, p, t, corners) < reach:
+                if count < found.shape[0]:
                     found[count, 0], found[count, 1] = p, t
                 count += 1
     return count
@@ -141,12 +149,26 @@ def inside_box(boxes, b, px, py, pz):
 
 
 @kernel
-def may_touch_triangle(triangles, body, self_collision, p, t):
-    """Whether point p and triangle t form a pair: p is not a corner, and they lie on two
-    bodies or on one that collides with itself."""
-    if p == triangles[t, 0] or p == triangles[t, 1] or p == triangles[t, 2]:
+def may_touch_triangle(body, self_collision, start, neighbours, triangles, p, t):
+    """Whether point p and triangle t form a pair: they lie on two bodies, or on one that
+    collides with itself and p is neither a corner nor a neighbour of one."""
+    if body[p] != body[triangles[t, 0]]:
+        return True
+    if not self_collision[body[p]]:
         return False
-    return body[p] != body[triangles[t, 0]] or self_collision[body[p]]
+    for k in range(3):
+        if p == triangles[t, k] or joined(start, neighbours, p, triangles[t, k]):
+            return False
+    return True
+
+
+@kernel
+def joined(start, neighbours, p, q):
+    """Whether particles p and q share a surface edge."""
+    for k in range(start[p], start[p + 1]):
+        if neighbours[k] == q:
+            return True
+    return False
 
 
 @kernel
@@ -157,12 +179,12 @@ def edge_edge_pairs(model, x, boxes, reach):
     if edges.shape[0] == 0:
         return np.empty((0, 2), np.int64)
     grid = box_grid(boxes)
-    body, self_collision = model.particle_body, model.body_self_collision
-    count = collect_edge_keys(edges, body, self_collision, boxes, reach, grid,
-                              np.empty(0, np.int64))
-    keys = np.empty(count, np.int64)
-    collect_edge_keys(edges, body, self_collision, boxes, reach, grid, keys)
-    keys = np.unique(keys)   # a pair met in several cells once, sorted
+    keys = np.empty(edges.shape[0] + 64, np.int64)
+    count = collect_edge_keys(model, x, boxes, reach, grid, keys)
+    if count > keys.shape[0]:   # a crowded step: now the count is known
+        keys = np.empty(count, np.int64)
+        collect_edge_keys(model, x, boxes, reach, grid, keys)
+    keys = np.unique(keys[:count])   # a pair met in several cells once, sorted
     pairs = np.empty((keys.shape[0], 2), np.int64)
     for k in range(keys.shape[0]):
         pairs[k, 0], pairs[k, 1] = keys[k] // edges.shape[0], keys[k] % edges.shape[0]
@@ -170,11 +192,12 @@ def edge_edge_pairs(model, x, boxes, reach):
 
 
 @kernel
-def collect_edge_keys(edges, body, self_collision, boxes, reach, grid, keys):
-    """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` if it has room for
-    them all."""
+def collect_edge_keys(model, x, boxes, reach, grid, keys):
+    """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` while it has
+    room."""
     origin, cell, dims, cell_start, members = grid
-    fill = keys.shape[0] > 0
+    edges, body, self_collision = model.surface_edges, model.particle_body, model.body_self_collision
+    start, neighbours = model.neighbour_start, model.neighbours
     own = np.empty((1, 6))
     count = 0
     for e in range(edges.shape[0]):
@@ -186,13 +209,38 @@ def collect_edge_keys(edges, body, self_collision, boxes, reach, grid, keys):
                 first = (ix * dims[1] + iy) * dims[2]
                 for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
                     f = members[k]
-                    if f > e and boxes_overlap(boxes, f, own) and no_shared_particle(edges, e, f) \
-                            and (body[edges[e, 0]] != body[edges[f, 0]]
-                                 or self_collision[body[edges[e, 0]]]):
-                        if fill:
+                    if f > e and boxes_overlap(boxes, f, own) \
+                            and may_touch_edge(body, self_collision, start, neighbours, edges,
+                                               e, f) \
+                            and edge_distance(x, edges, e, f) < reach:
+                        if count < keys.shape[0]:
                             keys[count] = e * edges.shape[0] + f
                         count += 1
     return count
+
+
+@kernel
+def point_triangle_distance(x, triangles, p, t, corners):
+    """The distance (m) from particle p to triangle t (``corners``: work space)."""
+    for k in range(3):
+        for c in range(3):
+            corners[k, c] = x[triangles[t, k], c]
+    w0, w1, w2 = closest_on_triangle(x[p], corners)
+    total = 0.0
+    for c in range(3):
+        total += (x[p, c] - w0 * corners[0, c] - w1 * corners[1, c] - w2 * corners[2, c]) ** 2
+    return math.sqrt(total)
+
+
+@kernel
+def edge_distance(x, edges, e, f):
+    """The distance (m) between edges e and f."""
+    a, b, c, d = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
+    s, t = closest_on_segments(x[a], x[b], x[c], x[d])
+    total = 0.0
+    for k in range(3):
+        total += ((1.0 - s) * x[a, k] + s * x[b, k] - (1.0 - t) * x[c, k] - t * x[d, k]) ** 2
+    return math.sqrt(total)
 
 
 @kernel
@@ -204,6 +252,16 @@ def boxes_overlap(boxes, f, own):
 
 
 @kernel
-def no_shared_particle(edges, e, f):
-    return (edges[e, 0] != edges[f, 0] and edges[e, 0] != edges[f, 1]
-            and edges[e, 1] != edges[f, 0] and edges[e, 1] != edges[f, 1])
+def may_touch_edge(body, self_collision, start, neighbours, edges, e, f):
+    """Whether edges e and f form a pair: they lie on two bodies, or on one that collides
+    with itself and no end of one is an end of the other or its neighbour."""
+    if body[edges[e, 0]] != body[edges[f, 0]]:
+        return True
+    if not self_collision[body[edges[e, 0]]]:
+        return False
+    for i in range(2):
+        for j in range(2):
+            p, q = edges[e, i], edges[f, j]
+            if p == q or joined(start, neighbours, p, q):
+                return False
+    return True

@@ -44,7 +44,7 @@ from .proximity import surface_pairs
 
 PASSES = 8          # Jacobi passes of the velocity impulses per step
 CORRECTION = 0.5    # share of an overlap removed per step
-SKIN = 1.0          # the search reaches this many times the largest thickness beyond contact
+SKIN = 2.0          # the search reaches this many times the largest thickness beyond contact
 
 
 @kernel
@@ -79,17 +79,30 @@ def start_surface_pairs(model, x):
 
 @kernel
 def current_surface_pairs(model, x, pairs):
-    """``pairs``, or a fresh list once a surface point has moved half the skin since."""
+    """``pairs``, or a fresh list once the surface points have moved apart by up to the skin
+    since it was found. Two points' distance changes by at most |d_p - d_q| for displacements
+    d, which is at most twice the largest |d_i - c| for any c: with c the middle of the
+    displacements, a cloth or a body that moves as a whole keeps its list."""
     if model.surface_triangles.shape[0] == 0:
         return pairs
     found_at = pairs[2]
+    points = model.surface_points
+    low = np.full(3, np.inf)
+    high = np.full(3, -np.inf)
+    for k in range(points.shape[0]):
+        for c in range(3):
+            moved = x[points[k], c] - found_at[k, c]
+            low[c] = min(low[c], moved)
+            high[c] = max(high[c], moved)
+    middle = 0.5 * (low + high)
     reach, skin = surface_search(model)
     limit = 0.25 * skin * skin
-    for k in range(model.surface_points.shape[0]):
-        p = model.surface_points[k]
-        moved = ((x[p, 0] - found_at[k, 0]) ** 2 + (x[p, 1] - found_at[k, 1]) ** 2
-                 + (x[p, 2] - found_at[k, 2]) ** 2)
-        if not moved <= limit:   # NaN too: a fresh search copes with it
+    for k in range(points.shape[0]):
+        p = points[k]
+        apart = ((x[p, 0] - found_at[k, 0] - middle[0]) ** 2
+                 + (x[p, 1] - found_at[k, 1] - middle[1]) ** 2
+                 + (x[p, 2] - found_at[k, 2] - middle[2]) ** 2)
+        if not apart <= limit:   # NaN too: a fresh search copes with it
             return start_surface_pairs(model, x)
     return pairs
 
@@ -139,6 +152,11 @@ def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, node
                            normal, depth, bodies, corners):
     """Fill contact ``row`` for point p and triangle t if they touch (module doc)."""
     a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+    rest = 0.5 * (thickness[body[p]] + thickness[body[a]])
+    for i in range(3):   # most listed pairs are further apart: a cheap test first
+        if not (min(x[a, i], x[b, i], x[c, i]) - 2.0 * rest < x[p, i]
+                < max(x[a, i], x[b, i], x[c, i]) + 2.0 * rest):
+            return False
     for i in range(3):
         corners[0, i], corners[1, i], corners[2, i] = x[a, i], x[b, i], x[c, i]
     w0, w1, w2 = closest_on_triangle(x[p], corners)
@@ -146,8 +164,7 @@ def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, node
     d1 = x[p, 1] - w0 * x[a, 1] - w1 * x[b, 1] - w2 * x[c, 1]
     d2 = x[p, 2] - w0 * x[a, 2] - w1 * x[b, 2] - w2 * x[c, 2]
     distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    rest = 0.5 * (thickness[body[p]] + thickness[body[a]])
-    if not distance < rest * (1.0 + SKIN):   # a point carried through: up to SKIN further
+    if not distance < 2.0 * rest:   # a point carried through the face: up to a thickness
         return False
     if w0 > 0.0 and w1 > 0.0 and w2 > 0.0:   # above the face: the face normal, on the start side
         n0, n1, n2 = triangle_normal(x, a, b, c)
@@ -179,6 +196,11 @@ def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weight
     """Fill contact ``row`` for edges e and f if they touch between their ends (where an end is
     closest, the point-triangle contacts of the faces beside it decide)."""
     a, b, c, q = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
+    rest = 0.5 * (thickness[body[a]] + thickness[body[c]])
+    for i in range(3):   # most listed pairs are further apart: a cheap test first
+        if max(x[a, i], x[b, i]) + rest < min(x[c, i], x[q, i]) \
+                or max(x[c, i], x[q, i]) + rest < min(x[a, i], x[b, i]):
+            return False
     s, t = closest_on_segments(x[a], x[b], x[c], x[q])
     if not (0.0 < s < 1.0 and 0.0 < t < 1.0):
         return False
@@ -186,7 +208,6 @@ def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weight
     d1 = (1.0 - s) * x[a, 1] + s * x[b, 1] - (1.0 - t) * x[c, 1] - t * x[q, 1]
     d2 = (1.0 - s) * x[a, 2] + s * x[b, 2] - (1.0 - t) * x[c, 2] - t * x[q, 2]
     distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    rest = 0.5 * (thickness[body[a]] + thickness[body[c]])
     if not (distance < rest and distance > 0.0):
         return False
     along = (d0 * ((1.0 - s) * start[a, 0] + s * start[b, 0] - (1.0 - t) * start[c, 0]

@@ -6,7 +6,8 @@ from .run import add_scene_arguments
 NAME = "render"
 HELP = ("simulate a scene and render it with no display to .mp4, .gif or a folder of PNGs "
         "(the viewer's drawing, polyscope on EGL)")
-DRAWABLE = ("surfaces", "particles", "structural", "shear", "bend", "face", "balls", "terrains")
+DRAWABLE = ("surfaces", "particles", "structural", "shear", "bend", "face", "balls", "terrains",
+            "contacts")
 
 
 def add_arguments(parser) -> None:

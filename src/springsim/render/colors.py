@@ -14,5 +14,7 @@ BALL_COLOR = (0.6, 0.62, 0.7)
 TERRAIN_COLOR = (0.72, 0.74, 0.7)
 TERRAIN_CHECKER_COLORS = ((0.78, 0.8, 0.76), (0.62, 0.64, 0.6))
 BOWL_COLOR = (0.55, 0.68, 0.78)
+CONTACT_COLOR = (0.85, 0.1, 0.1)             # body-body contact points
+CONTACT_NORMAL_COLOR = (0.1, 0.1, 0.1)       # and their normals
 BACKGROUND_COLOR = (0.75, 0.8, 0.86)         # a pale blue once polyscope has tone-mapped it
 LABEL_COLOR = (40, 40, 48)                    # the time label on video frames, 8-bit RGB

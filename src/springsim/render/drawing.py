@@ -2,8 +2,9 @@
 
 Particles as small spheres, springs as thin curve networks (one per kind, in the course colours),
 body surfaces with smooth normals (open ones such as cloth in a second colour underneath), balls
-as spheres of their contact radius, and the terrains. ``update(positions)`` moves everything to
-a new state; ``DrawOptions`` says what is shown.
+as spheres of their contact radius, the terrains, and (off by default) the body-body surface
+contacts of the state as points with short normals (contacts.py finds them). ``update(positions)``
+moves everything to a new state; ``DrawOptions`` says what is shown.
 """
 from dataclasses import dataclass, fields
 
@@ -14,6 +15,7 @@ from ..errors import require
 from ..springs import SpringKind
 from ..surfaces import body_surface
 from . import colors
+from .contacts import contact_marks, has_surface_contact
 
 
 @dataclass
@@ -28,6 +30,7 @@ class DrawOptions:
     face: bool = False
     balls: bool = True
     terrains: bool = True
+    contacts: bool = False
 
     @classmethod
     def only(cls, names) -> "DrawOptions":
@@ -60,6 +63,7 @@ class SceneDrawing:
         self._add_springs()
         self._add_particles_and_balls()
         self._add_terrains()
+        self._add_contacts()
         self.apply_options()
 
     # --- building -------------------------------------------------------------------------
@@ -121,6 +125,13 @@ class SceneDrawing:
             follow = drawn.follow if drawn.shape.recentre_distance is not None else None
             self.parts.append(_Part(drawn.mesh, "terrains", follow))
             drawn.part = self.parts[-1]
+
+    def _add_contacts(self) -> None:
+        if not has_surface_contact(self.model):
+            return
+        drawn = _ContactDrawing(self.model.arrays, 0.15 * self.spacing)
+        self.parts.append(_Part(drawn, "contacts", drawn.follow))
+        self.parts[-1].stale = True     # found only once shown: hidden, they cost nothing
 
     # --- use ------------------------------------------------------------------------------
     def update(self, positions) -> bool:
@@ -184,6 +195,44 @@ class _TerrainDrawing:
         near = positions.mean(axis=0)
         if self.shape.needs_recentring(near):
             self._build(near)
+
+
+class _ContactDrawing:
+    """The contacts of the state: a point cloud of contact points and a curve network of their
+    normals, registered anew whenever they are found (their number changes from state to state).
+    Stands for both structures in a _Part (``set_enabled``, ``get_name``)."""
+
+    POINTS, NORMALS = "contacts", "contact normals"
+
+    def __init__(self, arrays, radius: float):
+        self.arrays, self.radius = arrays, radius
+        self.enabled = False
+        self._register(np.empty((0, 3)), np.empty((0, 3)))
+
+    def follow(self, positions) -> None:
+        marks = contact_marks(self.arrays, positions)
+        self._register(marks.points, marks.ends)
+
+    def _register(self, points, ends) -> None:
+        cloud = ps.register_point_cloud(self.POINTS, points, color=colors.CONTACT_COLOR,
+                                        enabled=self.enabled)
+        cloud.set_radius(self.radius, relative=False)
+        count = len(points)
+        segments = np.arange(2 * count).reshape(count, 2)
+        nodes = np.stack([points, ends], axis=1).reshape(-1, 3)
+        normals = ps.register_curve_network(self.NORMALS, nodes, segments,
+                                            color=colors.CONTACT_NORMAL_COLOR,
+                                            enabled=self.enabled)
+        normals.set_radius(0.3 * self.radius, relative=False)
+
+    def set_enabled(self, shown: bool) -> None:
+        self.enabled = shown
+        for name, get in ((self.POINTS, ps.get_point_cloud),
+                          (self.NORMALS, ps.get_curve_network)):
+            get(name).set_enabled(shown)
+
+    def get_name(self) -> str:
+        return self.POINTS
 
 
 def typical_spacing(model) -> float:

@@ -3,9 +3,10 @@
 The panel (panel.py) only reads these values and calls these methods, so that a test can drive
 every control with no window. A setting that changes the physics edits a copy of the scene's
 dataclasses and rebuilds the Simulation from it (cheap); the rebuild keeps the current state when
-the particles stay the same (stiffness, damping, restitution, friction, drag, integrator, dt), and
-starts over when they do not (scene, terrain, cube height and rotation, particles per edge). A
-setting that cannot be simulated leaves everything as it was and shows why in ``message``.
+the particles stay the same (stiffness, damping, restitution, friction, drag, integrator, dt, a
+body's thickness and self-collision), and starts over when they do not (scene, terrain, cube
+height and rotation, particles per edge). A setting that cannot be simulated leaves everything as
+it was and shows why in ``message``.
 """
 import copy
 import dataclasses
@@ -14,6 +15,7 @@ import time
 import numpy as np
 
 from ..bodies.cube import Cube
+from ..bodies.surface_contact import SurfaceContact
 from ..errors import SceneError, SimulationDiverged
 from ..render.drawing import DrawOptions
 from ..scene import Scene
@@ -136,6 +138,20 @@ class Controls:
 
     def set_drag(self, value: float) -> bool:
         return self._edit(lambda scene: setattr(scene, "drag", float(value)))
+
+    def contact_bodies(self) -> list[tuple[int, str, SurfaceContact]]:
+        """(number in the scene, name, settings) of every body with surface contact keys."""
+        names = [body.name for body in self.sim.model.bodies]
+        return [(number, names[number], body) for number, body in
+                enumerate(self.sim.scene.bodies) if isinstance(body, SurfaceContact)]
+
+    def set_thickness(self, body: int, metres: float) -> bool:
+        """How far (m) body number ``body`` keeps other surfaces, and its own, away."""
+        return self._edit(lambda scene: setattr(scene.bodies[body], "thickness", float(metres)))
+
+    def set_self_collision(self, body: int, on: bool) -> bool:
+        """Whether body number ``body``'s surface pushes on itself."""
+        return self._edit(lambda scene: setattr(scene.bodies[body], "self_collision", bool(on)))
 
     # --- settings that start over ---------------------------------------------------------
     def set_cube_height(self, y: float) -> bool:

@@ -8,6 +8,7 @@ import polyscope.imgui as psim
 
 from ..integrators import integrator_names
 from ..presets import preset_names
+from ..render.contacts import has_surface_contact
 from ..springs import SpringKind
 from .controls import TERRAINS
 
@@ -123,6 +124,18 @@ class Panel:
             self._number("restitution", restitution, c.set_restitution, 0.0, 1.0)
             self._number("friction", c.terrain_value("friction"), c.set_friction, 0.0, 2.0)
         self._number("drag (N s/m)", c.sim.scene.drag, c.set_drag, fmt="%.4f")
+        self._body_contact()
+
+    def _body_contact(self) -> None:
+        """Per body with a surface: self-collision and thickness (``##number`` keeps ImGui's
+        labels apart)."""
+        c = self.controls
+        for number, name, body in c.contact_bodies():
+            changed, on = psim.Checkbox(f"{name} self-collision##{number}", body.self_collision)
+            if changed:
+                c.set_self_collision(number, on)
+            self._number(f"{name} thickness (m)##{number}", body.thickness,
+                         lambda value, n=number: c.set_thickness(n, value), fmt="%.4f")
 
     def _bodies(self) -> None:
         c = self.controls
@@ -139,8 +152,9 @@ class Panel:
 
     def _drawing(self) -> None:
         if psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
-            draw_toggles(self.controls.draw, self.controls.sim.model.spring_kind,
-                         self.viewer.set_drawn)
+            model = self.controls.sim.model
+            draw_toggles(self.controls.draw, model.spring_kind, self.viewer.set_drawn,
+                         contacts=has_surface_contact(model))
 
     def _view_and_mouse(self) -> None:
         c, viewer = self.controls, self.viewer
@@ -206,12 +220,13 @@ class Panel:
             self._pending.pop(label, None)
 
 
-def draw_toggles(draw, spring_kinds, set_drawn) -> None:
+def draw_toggles(draw, spring_kinds, set_drawn, contacts: bool = False) -> None:
     """A checkbox per part the model has (``draw``: render.DrawOptions); ``set_drawn(name, shown)``
-    applies a change. Shared by the viewer and the replay (springsim play)."""
+    applies a change; ``contacts``: whether the model has surfaces that touch. Shared by the
+    viewer and the replay (springsim play)."""
     present = {SpringKind(k).label for k in set(spring_kinds.tolist())}
     toggles = ["particles", *[k.label for k in SpringKind if k.label in present],
-               "surfaces", "balls", "terrains"]
+               "surfaces", "balls", "terrains", *(["contacts"] if contacts else [])]
     for number, name in enumerate(toggles):
         if number % 3:
             psim.SameLine()
