@@ -71,12 +71,12 @@ def jelly_stack() -> Scene:
 
 
 def cloth_drape() -> Scene:
-    """A free 25 x 25 cloth, 4 x 4 m, dropped flat from 3 m onto a jelly cube resting on the
+    """A free 25 x 25 cloth, 4 x 4 m, dropped flat 0.6 m above a jelly cube resting on the
     plane: it drapes over the cube, slides off its sides and folds onto itself on the floor
     (self-collision)."""
     cube = Cube(particles_per_edge=5, edge_length=1.6, position=(0.0, -0.2, 0.0),
                 particle_mass=2.0)
-    cloth = Cloth(position=(0.6, 2.0, 0.3), pinned="none")
+    cloth = Cloth(position=(0.2, 1.2, 0.1), pinned="none")
     return Scene(name="cloth-drape", bodies=[cube, cloth], terrains=[Plane()], dt=1e-4,
                  duration=4.0)
 

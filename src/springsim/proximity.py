@@ -24,14 +24,19 @@ from .geometry import closest_on_segments, closest_on_triangle
 
 
 @kernel
-def surface_pairs(model, x, reach):
+def surface_pairs(model, x, beyond, self_beyond):
     """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge
-    rows, lower first)) closer than ``reach`` (m)."""
+    rows, lower first)) closer than their rest distance (the mean of their bodies' thickness)
+    plus ``beyond`` (m), or ``self_beyond`` for pairs of one body."""
     triangles, edges = model.surface_triangles, model.surface_edges
+    thickest = 0.0
+    for b in range(model.body_thickness.shape[0]):
+        thickest = max(thickest, model.body_thickness[b])
+    reach = thickest + max(beyond, self_beyond)
     triangle_boxes = shape_boxes(x, triangles, reach)
     edge_boxes = shape_boxes(x, edges, reach)
-    points = point_triangle_pairs(model, x, triangle_boxes, reach)
-    return points, edge_edge_pairs(model, x, edge_boxes, reach)
+    points = point_triangle_pairs(model, x, triangle_boxes, beyond, self_beyond)
+    return points, edge_edge_pairs(model, x, edge_boxes, reach, beyond, self_beyond)
 
 
 @kernel
@@ -105,21 +110,21 @@ def box_cells(boxes, b, origin, cell, dims):
 
 
 @kernel
-def point_triangle_pairs(model, x, boxes, reach):
+def point_triangle_pairs(model, x, boxes, beyond, self_beyond):
     """The (point, triangle) pairs whose grown triangle box holds the point (module doc)."""
     if model.surface_triangles.shape[0] == 0:
         return np.empty((0, 2), np.int64)
     grid = box_grid(boxes)
     found = np.empty((model.surface_points.shape[0] + 64, 2), np.int64)
-    count = collect_point_pairs(model, x, boxes, reach, grid, found)
+    count = collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found)
     if count > found.shape[0]:   # a crowded step: now the count is known
         found = np.empty((count, 2), np.int64)
-        collect_point_pairs(model, x, boxes, reach, grid, found)
+        collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found)
     return found[:count]
 
 
 @kernel
-def collect_point_pairs(model, x, boxes, reach, grid, found):
+def collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found):
     """Count the pairs, writing them to ``found`` while it has room."""
     origin, cell, dims, cell_start, members = grid
     triangles = model.surface_triangles
@@ -135,7 +140,9 @@ def collect_point_pairs(model, x, boxes, reach, grid, found):
                     and may_touch_triangle(model.particle_body, model.body_self_collision,
                                            model.neighbour_start, model.neighbours, triangles,
                                            p, t) \
-                    and point_triangle_distance(x, triangles, p, t, corners) < reach:
+                    and point_triangle_distance(x, triangles, p, t, corners) \
+                    < search_distance(model.particle_body, model.body_thickness, p,
+                                      triangles[t, 0], beyond, self_beyond):
                 if count < found.shape[0]:
                     found[count, 0], found[count, 1] = p, t
                 count += 1
@@ -172,7 +179,7 @@ def joined(start, neighbours, p, q):
 
 
 @kernel
-def edge_edge_pairs(model, x, boxes, reach):
+def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
     """The (edge, edge) pairs, lower row first, that share no particle and whose boxes come
     within ``reach`` (each box is grown by it: one grown box against the other's own)."""
     edges = model.surface_edges
@@ -180,10 +187,10 @@ def edge_edge_pairs(model, x, boxes, reach):
         return np.empty((0, 2), np.int64)
     grid = box_grid(boxes)
     keys = np.empty(edges.shape[0] + 64, np.int64)
-    count = collect_edge_keys(model, x, boxes, reach, grid, keys)
+    count = collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys)
     if count > keys.shape[0]:   # a crowded step: now the count is known
         keys = np.empty(count, np.int64)
-        collect_edge_keys(model, x, boxes, reach, grid, keys)
+        collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys)
     keys = np.unique(keys[:count])   # a pair met in several cells once, sorted
     pairs = np.empty((keys.shape[0], 2), np.int64)
     for k in range(keys.shape[0]):
@@ -192,7 +199,7 @@ def edge_edge_pairs(model, x, boxes, reach):
 
 
 @kernel
-def collect_edge_keys(model, x, boxes, reach, grid, keys):
+def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
     """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` while it has
     room."""
     origin, cell, dims, cell_start, members = grid
@@ -212,11 +219,22 @@ def collect_edge_keys(model, x, boxes, reach, grid, keys):
                     if f > e and boxes_overlap(boxes, f, own) \
                             and may_touch_edge(body, self_collision, start, neighbours, edges,
                                                e, f) \
-                            and edge_distance(x, edges, e, f) < reach:
+                            and edge_distance(x, edges, e, f) \
+                            < search_distance(body, model.body_thickness, edges[e, 0],
+                                              edges[f, 0], beyond, self_beyond):
                         if count < keys.shape[0]:
                             keys[count] = e * edges.shape[0] + f
                         count += 1
     return count
+
+
+@kernel
+def search_distance(body, thickness, p, q, beyond, self_beyond):
+    """How far from each other particles p and q's shapes are searched (m): the distance
+    their surfaces are kept apart (the mean of their bodies' thickness), plus ``beyond``, or
+    ``self_beyond`` on one body."""
+    rest = 0.5 * (thickness[body[p]] + thickness[body[q]])
+    return rest + (self_beyond if body[p] == body[q] else beyond)
 
 
 @kernel

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .bodies.surface_contact import SurfaceContact
 from .errors import is_finite, require
 from .sampling import check_duration
 from .sizes import check_scene_size
@@ -52,6 +53,9 @@ class Scene:
             terrain.validate(f"terrains.{t}")
         self.validate_implicit_settings()
         check_scene_size(self)   # before anything is allocated
+        for i, body in enumerate(self.bodies):
+            if isinstance(body, SurfaceContact):
+                body.validate_thickness(f"bodies.{i}")
 
     def validate_implicit_settings(self) -> None:
         """``[implicit]`` is checked whatever the integrator (a scene may switch to one that

@@ -29,9 +29,10 @@ Why Jacobi and not one contact after another (Gauss-Seidel): the result would de
 contacts' order, so on the particle numbering, and a symmetric scene would not stay symmetric.
 Every impulse and shift acts with weights summing to zero, so momentum is conserved to rounding.
 
-The pairs come from proximity.surface_pairs, searched SKIN beyond the largest rest distance,
-and are kept while no surface particle has moved half the skin since (a Verlet list): a step
-where nothing touches costs one pass over the surface particles. A list found afresh gives the
+The pairs come from proximity.surface_pairs, searched SKIN thinnest thicknesses beyond contact,
+and are kept until the surface particles have moved apart by half the skin since (a Verlet
+list; moving together does not count: current_surface_pairs): a step where nothing touches
+costs two passes over the surface particles. A list found afresh gives the
 same contacts (the narrow phase decides), so results do not depend on when it was found.
 """
 import math
@@ -44,16 +45,17 @@ from .proximity import surface_pairs
 
 PASSES = 8          # Jacobi passes of the velocity impulses per step
 CORRECTION = 0.5    # share of an overlap removed per step
-SKIN = 2.0          # the search reaches this many times the largest thickness beyond contact
+SKIN = 2.0          # the search reaches this many times the thinnest surface beyond contact
 
 
 @kernel
-def surface_search(model):
-    """(reach, skin) of the pair search, m."""
-    thickest = 0.0
+def surface_skin(model):
+    """How far beyond contact the pair search reaches (m): SKIN times the thinnest surface."""
+    thinnest = np.inf
     for b in range(model.body_thickness.shape[0]):
-        thickest = max(thickest, model.body_thickness[b])
-    return thickest * (1.0 + SKIN), thickest * SKIN
+        if model.body_thickness[b] > 0.0:
+            thinnest = min(thinnest, model.body_thickness[b])
+    return SKIN * thinnest
 
 
 @kernel
@@ -68,8 +70,8 @@ def start_surface_pairs(model, x):
     surface points when they were found)."""
     if model.surface_triangles.shape[0] == 0:
         return no_surface_pairs(model, x)
-    reach, skin = surface_search(model)
-    points, edges = surface_pairs(model, x, reach)
+    skin = surface_skin(model)
+    points, edges = surface_pairs(model, x, skin, skin)
     found_at = np.empty((model.surface_points.shape[0], 3))
     for k in range(model.surface_points.shape[0]):
         for c in range(3):
@@ -95,7 +97,7 @@ def current_surface_pairs(model, x, pairs):
             low[c] = min(low[c], moved)
             high[c] = max(high[c], moved)
     middle = 0.5 * (low + high)
-    reach, skin = surface_search(model)
+    skin = surface_skin(model)
     limit = 0.25 * skin * skin
     for k in range(points.shape[0]):
         p = points[k]
@@ -116,8 +118,8 @@ def resolve_surface_contacts(model, x, v, start, pairs):
     pairs = current_surface_pairs(model, x, pairs)
     contacts = surface_contacts(model, x, start, pairs[0], pairs[1])
     if contacts[0].shape[0] > 0:
-        apply_impulses(model, v, contacts)
-        correct_overlaps(model, x, contacts)
+        stuck = apply_impulses(model, v, contacts)
+        correct_overlaps(model, x, start, contacts, stuck)
     return pairs
 
 
@@ -247,9 +249,11 @@ def split_mobilities(model, nodes, weights):
 
 @kernel
 def apply_impulses(model, v, contacts):
-    """PASSES Jacobi passes of normal and friction impulses (module doc)."""
+    """PASSES Jacobi passes of normal and friction impulses (module doc); returns which
+    contacts stuck (static friction held them) in the last pass."""
     nodes, weights, normal, depth, bodies = contacts
     count = nodes.shape[0]
+    stuck = np.zeros(count, np.bool_)
     mobility = split_mobilities(model, nodes, weights)
     impulse = np.zeros((count, 3))      # this pass's, per contact
     pushed = np.zeros(count)            # normal impulse applied so far
@@ -273,8 +277,8 @@ def apply_impulses(model, v, contacts):
                 target[k] = -restitution * min(approach, 0.0)
             j = max(target[k] - approach, 0.0) / mobility[k]
             pushed[k] += j
-            friction_impulse(model, k, bodies, relative, approach, normal, mobility[k],
-                             pushed[k], rubbed, impulse)
+            stuck[k] = friction_impulse(model, k, bodies, relative, approach, normal,
+                                        mobility[k], pushed[k], rubbed, impulse)
             for c in range(3):
                 impulse[k, c] += j * normal[k, c]
         for k in range(count):
@@ -282,6 +286,7 @@ def apply_impulses(model, v, contacts):
                 share = weights[k, i] * model.inv_mass[nodes[k, i]]
                 for c in range(3):
                     v[nodes[k, i], c] += share * impulse[k, c]
+    return stuck
 
 
 @inline_kernel
@@ -289,7 +294,7 @@ def friction_impulse(model, k, bodies, relative, approach, normal, mobility, pus
                      impulse):
     """Set impulse[k] to this pass's friction: the change of the accumulated friction ``rubbed``
     that stops the sliding, kept within static_friction x ``pushed`` or else cut to
-    friction x ``pushed`` (Coulomb; ``mobility`` is the split W)."""
+    friction x ``pushed`` (Coulomb; ``mobility`` is the split W). Returns whether it sticks."""
     first, second = bodies[k, 0], bodies[k, 1]
     kinetic = 0.5 * (model.body_friction[first] + model.body_friction[second])
     static = 0.5 * (model.body_static_friction[first] + model.body_static_friction[second])
@@ -297,24 +302,42 @@ def friction_impulse(model, k, bodies, relative, approach, normal, mobility, pus
     w1 = rubbed[k, 1] - (relative[1] - approach * normal[k, 1]) / mobility
     w2 = rubbed[k, 2] - (relative[2] - approach * normal[k, 2]) / mobility
     size = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if size > static * pushed:
+    sticks = size <= static * pushed
+    if not sticks:
         cut = kinetic * pushed / size
         w0, w1, w2 = w0 * cut, w1 * cut, w2 * cut
     impulse[k, 0], impulse[k, 1], impulse[k, 2] = (w0 - rubbed[k, 0], w1 - rubbed[k, 1],
                                                    w2 - rubbed[k, 2])
     rubbed[k, 0], rubbed[k, 1], rubbed[k, 2] = w0, w1, w2
+    return sticks
 
 
 @kernel
-def correct_overlaps(model, x, contacts):
-    """Move each touching stencil apart by CORRECTION of its depth, shared like the impulses."""
+def correct_overlaps(model, x, start, contacts, stuck):
+    """Move each touching stencil apart by CORRECTION of its depth, and take back the sliding
+    of a stuck one during the step, shared like the impulses (module doc). All shifts are
+    found from the same positions before any is made (Jacobi, as the impulses)."""
     nodes, weights, normal, depth, bodies = contacts
     mobility = split_mobilities(model, nodes, weights)
+    shift = np.zeros((nodes.shape[0], 3))
     for k in range(nodes.shape[0]):
         if not mobility[k] > 0.0:
             continue
-        shift = CORRECTION * depth[k] / mobility[k]
-        for i in range(4):
-            share = weights[k, i] * model.inv_mass[nodes[k, i]] * shift
+        push = CORRECTION * max(depth[k], 0.0)
+        for c in range(3):
+            shift[k, c] = push * normal[k, c]
+        if stuck[k]:
+            slid = np.zeros(3)
+            for i in range(4):
+                for c in range(3):
+                    slid[c] += weights[k, i] * (x[nodes[k, i], c] - start[nodes[k, i], c])
+            along = slid[0] * normal[k, 0] + slid[1] * normal[k, 1] + slid[2] * normal[k, 2]
             for c in range(3):
-                x[nodes[k, i], c] += share * normal[k, c]
+                shift[k, c] -= slid[c] - along * normal[k, c]
+        for c in range(3):
+            shift[k, c] /= mobility[k]
+    for k in range(nodes.shape[0]):
+        for i in range(4):
+            share = weights[k, i] * model.inv_mass[nodes[k, i]]
+            for c in range(3):
+                x[nodes[k, i], c] += share * shift[k, c]

@@ -78,7 +78,7 @@ class Cloth(SurfaceContact):
         for kind in ("structural", "shear", "bend"):
             getattr(self, kind).validate(f"{key}.{kind}")
         self._validate_pinned(key)
-        self.validate_surface_contact(key, min(self.width, self.height) / (n - 1))
+        self.validate_surface_contact(key)
 
     def _validate_pinned(self, key: str) -> None:
         if isinstance(self.pinned, str):
@@ -92,6 +92,9 @@ class Cloth(SurfaceContact):
             whole = isinstance(index, (int, np.integer)) and not isinstance(index, bool)
             require(whole and 0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must be whole numbers in [0, {count - 1}]")
+
+    def surface_spacing(self) -> float:
+        return min(self.width, self.height) / (self.particles_per_edge - 1)
 
     def counts(self) -> tuple[int, int]:
         """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone."""

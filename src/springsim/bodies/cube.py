@@ -77,11 +77,14 @@ class Cube(LatticeSprings, SurfaceContact):
                 self.rotation_axis, "must be a non-zero vector")
         require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
         self.validate_springs(key)
-        self.validate_surface_contact(key, self.edge_length / (n - 1))
+        self.validate_surface_contact(key)
         count = n ** 3
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
+
+    def surface_spacing(self) -> float:
+        return self.edge_length / (self.particles_per_edge - 1)
 
     def counts(self) -> tuple[int, int]:
         """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone."""

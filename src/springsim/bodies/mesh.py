@@ -71,7 +71,7 @@ class MeshBody(LatticeSprings, SurfaceContact):
         require(is_finite(self.particle_mass) and self.particle_mass > 0,
                 f"{key}.particle_mass", self.particle_mass, "must be > 0 kg")
         self.validate_springs(key)
-        self.validate_surface_contact(key, self.spacing)
+        self.validate_surface_contact(key)
         mesh = self.mesh(f"{key}.file")
         volume = check_closed(mesh, f"{key}.file", self.file)
         check_memory(mesh, volume, self.spacing, f"{key}.spacing")
@@ -79,6 +79,9 @@ class MeshBody(LatticeSprings, SurfaceContact):
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
+
+    def surface_spacing(self) -> float:
+        return self.spacing
 
     def counts(self) -> tuple[int, int]:
         """Particles, and springs at most: each lattice point starts at most the cube's
@@ -118,7 +121,8 @@ class MeshBody(LatticeSprings, SurfaceContact):
             pinned=pinned, springs=springs, spring_kind=kinds,
             spring_parameters=spring_parameters(self),
             surface=self.mesh().triangles.astype(np.int32), embedding=embedding,
-            terrain_offsets=surface_offsets(vertices, positions, embedding, self.spacing))
+            terrain_offsets=surface_offsets(vertices, positions, embedding, self.spacing),
+            collision_surface=lattice_boundary(index))
 
 
 def lattice_counts(vertices: np.ndarray, spacing: float) -> np.ndarray:
@@ -203,6 +207,37 @@ def full_cells(index: np.ndarray) -> np.ndarray:
     for a, b, c in np.ndindex(2, 2, 2):
         full &= kept[a:a + full.shape[0], b:b + full.shape[1], c:c + full.shape[2]]
     return np.argwhere(full)
+
+
+def lattice_boundary(index: np.ndarray) -> np.ndarray:
+    """(c, 3) int32 triangles of particle numbers: the faces of full cells whose neighbour across
+    the face is not full (or lies beyond the lattice), each once, split along a diagonal into two
+    triangles wound so that normals point out of the full cells (contact is two-sided, but the
+    winding is consistent). A face between two full cells is inside the body and left out.
+
+    A particle that is a corner of no full cell (a thin part: a point inside the mesh whose
+    neighbours are not) is on no triangle: other bodies do not touch it, though it still pulls on
+    its neighbours through its springs and touches terrains. The boundary faces of the full
+    cells enclose every full cell, so this only loses features thinner than one spacing."""
+    shape = tuple(n - 1 for n in index.shape)
+    is_full = np.zeros(tuple(n + 2 for n in shape), bool)    # a margin of empty cells
+    is_full[(slice(1, -1),) * 3][tuple(full_cells(index).T)] = True
+    inner = is_full[1:-1, 1:-1, 1:-1]
+    triangles = []
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3       # right-handed (axis, u, v)
+        for side in (0, 1):
+            step = [slice(1, -1)] * 3
+            step[axis] = slice(2 * side, 2 * side + shape[axis])   # the neighbour across
+            cells = np.argwhere(inner & ~is_full[tuple(step)])
+            corners = []
+            for du, dv in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                offset = np.zeros(3, np.int64)
+                offset[axis], offset[u], offset[v] = side, du, dv
+                corners.append(index[tuple((cells + offset).T)])
+            a, b, c, d = corners if side else corners[::-1]   # counter-clockwise seen outside
+            triangles += [np.stack([a, b, c], 1), np.stack([a, c, d], 1)]
+    return np.concatenate(triangles).astype(np.int32)
 
 
 def embed(vertices, low, spacing: float, index, full) -> tuple[Embedding, int]:

@@ -25,17 +25,12 @@ class SurfaceContact:
     static_friction: float = 0.5     # a contact sticks while |f_T| <= static_friction |f_N|
     restitution: float = 0.0         # share of the approach speed given back by a contact
 
-    def validate_surface_contact(self, key: str, spacing: float | None = None) -> None:
-        """Check the keys; ``spacing`` (m), the body's rest distance between neighbouring
-        surface particles, bounds the thickness of a self-colliding body."""
+    def validate_surface_contact(self, key: str) -> None:
+        """Check the keys on their own (``validate_thickness`` checks them against the body)."""
         require(is_finite(self.thickness) and 0 < self.thickness <= MAX_THICKNESS,
                 f"{key}.thickness", self.thickness, f"must be in (0, {MAX_THICKNESS:g}] m")
         require(isinstance(self.self_collision, bool), f"{key}.self_collision",
                 self.self_collision, "must be true or false")
-        if self.self_collision and spacing is not None:
-            require(self.thickness < 0.5 * spacing, f"{key}.thickness", self.thickness,
-                    f"must be below half the particle spacing ({0.5 * spacing:.4g} m) when "
-                    "self_collision is on: neighbours would start in contact")
         for name in ("friction", "static_friction"):
             value = getattr(self, name)
             require(is_finite(value) and 0 <= value <= 10, f"{key}.{name}", value,
@@ -44,3 +39,13 @@ class SurfaceContact:
                 self.static_friction, f"must be >= friction ({self.friction:g})")
         require(is_finite(self.restitution) and 0 <= self.restitution <= 1,
                 f"{key}.restitution", self.restitution, "must be in [0, 1]")
+
+    def validate_thickness(self, key: str) -> None:
+        """A self-colliding body's thickness below half its particle spacing (the body's
+        ``surface_spacing()``, m): neighbours would start in contact. Checked after the scene's
+        size, so that a body too large to build is refused for its size."""
+        if self.self_collision:
+            spacing = self.surface_spacing()
+            require(self.thickness < 0.5 * spacing, f"{key}.thickness", self.thickness,
+                    f"must be below half the particle spacing ({0.5 * spacing:.4g} m) when "
+                    "self_collision is on: neighbours would start in contact")

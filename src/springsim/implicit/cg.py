@@ -36,7 +36,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from .ball_contact import add_contact_blocks, add_contact_product, no_ball_contacts
+from .ball_contact import add_contact_blocks, add_contact_product, no_contacts
 from .constraints import filter_constrained, filtered
 from .jacobian import block_multiply
 from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
@@ -96,7 +96,7 @@ def precondition(inverse, r, out):
 def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, reference_norm,
                 r, s, c, q):
     """``contact_cg`` for the assembled matrix alone (no ball-particle contacts)."""
-    return contact_cg(pattern, blocks, no_spring_terms(), no_ball_contacts(), b, kind, normal, u,
+    return contact_cg(pattern, blocks, no_spring_terms(), no_contacts(), b, kind, normal, u,
                       tolerance, max_iterations, reference_norm, r, s, c, q)
 
 

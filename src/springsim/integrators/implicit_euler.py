@@ -29,8 +29,8 @@ import numpy as np
 from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import force_columns, spring_forces
-from ..implicit.ball_contact import (find_ball_contacts, linearize_ball_contacts,
-                                     newton_iterations_needed, update_ball_contacts)
+from ..implicit.ball_contact import (find_solve_contacts, linearize_contacts,
+                                     newton_iterations_needed, update_active_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
@@ -38,6 +38,7 @@ from ..implicit.constraints import (find_constraints, hold_all_constrained, hold
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
+from ..implicit.surface_contact import kept_surface_pairs
 from . import Integrator, register
 from ._steps import add_scaled, drive
 
@@ -59,32 +60,32 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
 
 
 @kernel
-def solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v, dv, h, kind, normal, terrain,
-                        normal_floor, friction_damping, guess, ddv, tolerance, max_iterations,
-                        reaction, r, s, c, q):
+def solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x, v, dv, h, kind, normal,
+                        terrain, normal_floor, friction_damping, guess, ddv, tolerance,
+                        max_iterations, reaction, r, s, c, q):
     """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
-    ball-particle contacts (implicit.ball_contact) between solves; the first solve starts
+    the ball and surface contacts (implicit.ball_contact) between solves; the first solve starts
     along ``guess`` (cg.mass_start). Returns the conjugate-gradient iterations taken and the
     number of solves."""
-    mass_start(pattern, blocks, terms, balls, rhs, kind, normal, model.inv_mass, guess, ddv, r,
+    mass_start(pattern, blocks, terms, contacts, rhs, kind, normal, model.inv_mass, guess, ddv, r,
                s, q)
-    iterations, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
+    iterations, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
                                        tolerance, max_iterations, 0.0, r, s, c, q)
-    conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
+    conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
     for update in range(MAX_CONTACT_UPDATES):
-        system_multiply(pattern, blocks, terms, balls, ddv, q)
+        system_multiply(pattern, blocks, terms, contacts, ddv, q)
         add_scaled(reaction, q, -1.0, rhs)
         terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
                                           normal, terrain, normal_floor, friction_damping,
                                           reaction)
-        balls_changed = update_ball_contacts(balls, h, ddv, rhs) > 0
-        if not (terrain_changed or balls_changed):
+        contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
+        if not (terrain_changed or contacts_changed):
             break
-        more, reference = contact_cg(pattern, blocks, terms, balls, rhs, kind, normal, ddv,
+        more, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
                                      tolerance, max_iterations, reference, r, s, c, q)
-        conserve_momentum(pattern, blocks, terms, balls, rhs, kind, ddv, q)
+        conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
         solves += 1
@@ -100,19 +101,19 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
     The first solve starts along the last step's velocity change (last_change, kept in the
     state; cg.mass_start says why). The solution is the same to the CG tolerance. Later Newton
     iterations solve for a correction, for which it is no guess: they start along none."""
-    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms = work
+    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms, kept = work
     pattern = layout.diagonal
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
-    balls = find_ball_contacts(model, x, v, h)
+    contacts = find_solve_contacts(model, x, v, h, kept)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
     no_guess = np.zeros((0, 3))
-    for newton in range(newton_iterations_needed(model, balls, v, h, newton_iterations)):
+    for newton in range(newton_iterations_needed(model, contacts, v, h, newton_iterations)):
         guess = last_change if newton == 0 else no_guess
         assemble_diagonal_and_terms(model, pattern, x_k, 1.0, h, h * h, blocks, terms)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
-        linearize_ball_contacts(model, balls, x, v, dv, h, rhs)
+        linearize_contacts(model, contacts, x, v, dv, h, rhs)
         ddv[:] = 0.0
         for i in range(x.shape[0]):
             hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
@@ -123,8 +124,8 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
                                                       terrain, normal, v, dv, ddv, damping)
             set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
                                  friction_damping)
-        iterations, solves = solve_with_contacts(model, pattern, blocks, terms, balls, rhs, x, v,
-                                                 dv, h, kind, normal, terrain, normal_floor,
+        iterations, solves = solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x,
+                                                 v, dv, h, kind, normal, terrain, normal_floor,
                                                  friction_damping, guess, ddv, tolerance,
                                                  max_iterations, reaction, r, s, c, q)
         statistics[0] += iterations
@@ -141,13 +142,14 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
 @kernel
 def workspace(layout, x):
     """The arrays a step works in: the matrix's diagonal blocks, twelve vectors shaped like x,
-    the force columns and the springs' terms of the matrix."""
+    the force columns, the springs' terms of the matrix and the kept surface pair list
+    (implicit.surface_contact)."""
     blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
     vectors = [np.zeros_like(x) for _ in range(12)]
     return (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
             vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
             force_columns(x), spring_terms_like(layout.runs, layout.run_entries,
-                                                layout.loose_pairs, x))
+                                                layout.loose_pairs, x), kept_surface_pairs(x))
 
 
 @kernel

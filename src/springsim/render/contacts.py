@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..proximity import surface_pairs
-from ..surface_collisions import surface_contacts, surface_search
+from ..surface_collisions import surface_contacts, surface_skin
 
 NORMAL_LENGTH = 2.0   # drawn normals, in rest distances (thicknesses) of their pair
 
@@ -36,8 +36,8 @@ def contact_marks(arrays, x) -> ContactMarks:
     if len(arrays.surface_triangles) == 0:
         empty = np.empty((0, 3))
         return ContactMarks(empty, empty, empty)
-    reach, _ = surface_search(arrays)
-    point_pairs, edge_pairs = surface_pairs(arrays, x, reach)
+    skin = surface_skin(arrays)
+    point_pairs, edge_pairs = surface_pairs(arrays, x, skin, skin)
     nodes, weights, normals, _, bodies = surface_contacts(arrays, x, x, point_pairs, edge_pairs)
     second_side = np.minimum(weights, 0.0)
     points = -np.einsum("kn,knc->kc", second_side, x[nodes])

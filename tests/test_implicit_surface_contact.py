@@ -1,0 +1,106 @@
+"""Surface contact inside backward Euler's solve (implicit/ball_contact.py, implicit/surface_contact.py).
+
+Oracles: a cube resting on another stays on top of it, its surface never more than a thickness
+into the other's, at frame-sized steps; a cube thrown at 10 to 20 m/s onto a cube or a cloth does
+not pass through it in one 1/30 s step (it moves 0.33 to 0.67 m, more than its particle spacing);
+two free cubes thrown at each other keep their total momentum to rounding (the contact forces act
+with weights summing to zero, and the solve conserves momentum when nothing is constrained).
+
+The cubes' particles weigh 0.1 kg (a 12.5 kg cube on its 2000 N/m springs): a 125 kg jelly cube
+sags into a bowl under its own weight on another, and the lowest-against-highest test would then
+measure the sag, not the contact.
+"""
+import numpy as np
+import pytest
+
+import springsim
+from springsim.bodies.cloth import Cloth
+from springsim.bodies.cube import Cube
+from springsim.scene import Scene
+from springsim.terrains.plane import Plane
+
+EDGE = 1.0
+PER_EDGE = 5
+COUNT = PER_EDGE ** 3
+MASS = 0.1
+THICKNESS = 0.05
+
+
+def cube(centre, velocity=(0.0, 0.0, 0.0)):
+    return Cube(particles_per_edge=PER_EDGE, edge_length=EDGE, particle_mass=MASS,
+                position=centre, velocity=velocity, thickness=THICKNESS)
+
+
+def stack(upper_height, upper_speed, dt):
+    """A cube on a plane and a second cube above it, falling at ``upper_speed``."""
+    lower = cube((0.0, 0.5 * EDGE, 0.0))
+    upper = cube((0.0, upper_height, 0.0), (0.0, -upper_speed, 0.0))
+    scene = Scene(bodies=[lower, upper], terrains=[Plane(point=(0.0, 0.0, 0.0))], dt=dt)
+    return springsim.Simulation(scene, integrator="implicit_euler")
+
+
+def separation(x):
+    """The upper cube's lowest particle's height over the lower cube's highest."""
+    return x[COUNT:, 1].min() - x[:COUNT, 1].max()
+
+
+@pytest.mark.parametrize("dt", [1.0 / 60.0, 1.0 / 30.0])
+def test_a_cube_resting_on_a_cube_stays_on_it(dt):
+    """Placed a thickness above the lower cube, the upper one settles on it and stays there for
+    3 s: at no step does its surface sink more than a thickness into the lower one's."""
+    sim = stack(1.5 * EDGE + THICKNESS, 0.0, dt)
+    for _ in range(round(3.0 / dt)):
+        sim.step(1)
+        assert separation(sim.positions) >= -THICKNESS
+    x, v = sim.positions, sim.velocities
+    assert x[COUNT:, 1].mean() > x[:COUNT, 1].max()   # on top
+    assert np.abs(v[COUNT:, 1].mean()) < 0.05        # and at rest on it
+
+
+@pytest.mark.parametrize("speed", [10.0, 20.0])
+def test_a_fast_cube_does_not_pass_through_a_cube(speed):
+    dt = 1.0 / 30.0
+    sim = stack(1.6 * EDGE, speed, dt)
+    for _ in range(round(0.6 / dt)):
+        sim.step(1)
+        assert separation(sim.positions) >= -THICKNESS
+    assert sim.velocities[COUNT:, 1].mean() > -1.0   # stopped by the lower cube
+
+
+@pytest.mark.parametrize("speed", [10.0, 20.0])
+def test_a_fast_cube_does_not_pass_through_a_cloth(speed):
+    """A cloth pinned at its corners catches a cube thrown down at it: the cube's lowest particle
+    stays above the cloth's lowest, less the distance the two surfaces keep (the mean of their
+    thicknesses), and the cube ends held in the cloth."""
+    dt = 1.0 / 30.0
+    cloth = Cloth(particles_per_edge=15, width=3.0, height=3.0, position=(0.0, 1.0, 0.0),
+                  particle_mass=0.1)
+    thrown = cube((0.1, 2.0, -0.05), (0.0, -speed, 0.0))
+    sim = springsim.Simulation(Scene(bodies=[cloth, thrown], dt=dt), integrator="implicit_euler")
+    sheet = 15 * 15
+    rest = 0.5 * (cloth.thickness + THICKNESS)
+    for _ in range(round(1.0 / dt)):
+        sim.step(1)
+        x = sim.positions
+        assert x[sheet:, 1].min() >= x[:sheet, 1].min() - rest
+    assert sim.positions[sheet:, 1].mean() > sim.positions[:sheet, 1].min()
+
+
+@pytest.mark.parametrize("dt", [1.0 / 60.0, 1.0 / 30.0])
+def test_free_cubes_thrown_at_each_other_keep_their_momentum(dt):
+    """No gravity, no terrain, no drag: whatever the contacts do, the total momentum stays what
+    it was, while each cube's own momentum changes a lot (they did collide)."""
+    first = cube((-0.8, 0.0, 0.0), (6.0, 0.0, 0.0))
+    second = cube((0.8, 0.3, 0.2), (-3.0, 0.0, 0.0))
+    scene = Scene(bodies=[first, second], gravity=(0.0, 0.0, 0.0), dt=dt)
+    sim = springsim.Simulation(scene, integrator="implicit_euler")
+    mass = sim.model.mass
+    momentum = mass @ sim.velocities
+    first_before = mass[:COUNT] @ sim.velocities[:COUNT]
+    for _ in range(round(0.5 / dt)):
+        sim.step(1)
+        np.testing.assert_allclose(mass @ sim.velocities, momentum, rtol=0,
+                                   atol=1e-9 * np.abs(momentum).max())
+    first_after = mass[:COUNT] @ sim.velocities[:COUNT]
+    assert np.linalg.norm(first_after - first_before) > 0.3 * np.linalg.norm(first_before)
+    assert np.all(np.isfinite(sim.positions))
