@@ -19,6 +19,13 @@ the cube's springs, with the mesh's own surface riding the lattice.
   ball keeps its radius: every vertex lies within that distance of a particle that stays that far
   from the terrain, so no vertex of a body at rest goes below it. Where the surface passes
   through the particles (a box), the offsets are zero.
+  Other bodies (body-body contact, contact_shapes.py) touch a mesh body through the boundary
+  faces of its lattice, kept ``thickness`` apart as any surface: the faces of full cells whose
+  neighbour across the face is not full, two triangles each (``collision_surface``,
+  lattice_boundary). That boundary lies within about a spacing inside the drawn surface (on it
+  for a box), so another body may be seen to sink up to about a spacing into the drawn mesh.
+  Particles that are a corner of no full cell (thin parts, and some points just inside a curved
+  surface) are on no such face: they are not touched by other bodies.
 """
 import functools
 import os
