@@ -67,6 +67,11 @@ def test_two_cubes_stacked_stay_stacked(integrator):
     check_stack_holds(integrator, 1e-3)
 
 
+@pytest.mark.xfail(strict=True, reason="known bug, issue 10: under implicit_euler the penalty "
+                   "contacts of the solve have no friction and the post-step pass sees no normal "
+                   "push to scale its friction by, so a cube resting on a cube drifts sideways "
+                   "at about 0.065 m/s (the stack holds: the gap check passes; the at-rest "
+                   "check fails)")
 def test_two_cubes_stacked_stay_stacked_implicit_euler():
     check_stack_holds("implicit_euler", 1 / 60)
 

@@ -12,12 +12,14 @@ A step moves two particles i and j apart or together by at most h |v_i - v_j| <=
 velocity box makes the bound small for bodies moving together (a falling cloth) and 2 h V for
 two bodies approaching at V each. Pairs are searched (proximity.surface_pairs) on the predicted
 positions x + h v with reach = each pair's rest distance + that bound + REACH_SLACK of the
-largest thickness, for what the solve's velocity change adds. For the self-contact of one
-body the bound is capped at MOST_CLOSING thicknesses: a cloth hit by a 20 m/s ball at 1/30 s moves 0.7 m a step, and a
-search that far found 200k to 700k self-contact candidates of which hundreds, passing by rather
-than through each other, were taken for crossings; what a capped search misses and ends within
-two thicknesses, the post-step pass still resolves. A model without surface contact returns at
-once.
+largest thickness, for what the solve's velocity change adds. A model without surface contact
+returns at once.
+
+Self-contact (a cloth's folds) is not in the solve, only in the post-step pass: with it, a
+100 x 100 cloth hanging at 1/60 s ran at 1.5 steps/s instead of 67 (every particle within a
+few thicknesses of hundreds of its own triangles), and a cloth hit by a 20 m/s ball at 1/30 s
+(0.7 m a step) had hundreds of its own pairs, passing by rather than through each other, taken
+for crossings, which threw the ball 13 m up.
 
 The search (proximity.py, 0.64 ms a step on cloth-balls's self-colliding 25 x 25 cloth, ten times
 the ball search) is not run every step: it reaches SKIN thicknesses farther, and its list is kept
@@ -40,7 +42,7 @@ from ..proximity import surface_pairs
 
 REACH_SLACK = 0.5   # share of the largest thickness added to the reach a step needs
 SKIN = 2.0          # thicknesses the search reaches beyond that, so that its list can be kept
-MOST_CLOSING = 10.0  # thicknesses a step's solve looks ahead at most (module doc)
+NO_SELF_CONTACT = -np.inf   # the search distance that finds no pair of one body
 
 
 @kernel
@@ -58,7 +60,7 @@ def find_surface_pairs(model, x, v, h, kept):
     """(point-triangle pairs (K, 2), edge-edge pairs (L, 2)) the step may bring within their
     rest distance: the ``kept`` list (kept_surface_pairs) while it holds them all, else a fresh
     search, kept (module doc); none without surface contact."""
-    if model.surface_triangles.shape[0] == 0:
+    if model.surface_triangles.shape[0] == 0 or one_body(model):
         return np.empty((0, 2), np.int64), np.empty((0, 2), np.int64)
     thickest = 0.0
     for b in range(model.body_thickness.shape[0]):
@@ -73,11 +75,22 @@ def find_surface_pairs(model, x, v, h, kept):
     if reach + 2.0 * spread_since(model.surface_points, predicted, found_at) <= found_reach[0]:
         return pairs[0], pairs[1]
     found_reach[0] = reach + SKIN * thickest
-    self_reach = min(found_reach[0], (REACH_SLACK + SKIN + MOST_CLOSING) * thickest)
-    points, edges = surface_pairs(model, predicted, found_reach[0], self_reach)
+    # a body's own folds are left to the post-step pass (module doc): no pair of one body
+    points, edges = surface_pairs(model, predicted, found_reach[0], NO_SELF_CONTACT)
     pairs[0], pairs[1] = points, edges
     found_at[:] = predicted
     return points, edges
+
+
+@kernel
+def one_body(model):
+    """Whether every surface belongs to one body: then the solve has no pair to look for."""
+    body = model.particle_body
+    first = body[model.surface_points[0]]
+    for p in model.surface_points:
+        if body[p] != first:
+            return False
+    return True
 
 
 @kernel
