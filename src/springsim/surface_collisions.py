@@ -66,47 +66,45 @@ def no_surface_pairs(model, x):
 
 @kernel
 def start_surface_pairs(model, x):
-    """The pair list for the state x: (point-triangle pairs, edge-edge pairs, positions of the
-    surface points when they were found)."""
+    """The pair list for the state x: (point-triangle pairs, edge-edge pairs, the positions
+    when they were found)."""
     if model.surface_triangles.shape[0] == 0:
         return no_surface_pairs(model, x)
     skin = surface_skin(model)
     points, edges = surface_pairs(model, x, skin, skin)
-    found_at = np.empty((model.surface_points.shape[0], 3))
-    for k in range(model.surface_points.shape[0]):
-        for c in range(3):
-            found_at[k, c] = x[model.surface_points[k], c]
-    return points, edges, found_at
+    return points, edges, x.copy()
 
 
 @kernel
 def current_surface_pairs(model, x, pairs):
     """``pairs``, or a fresh list once the surface points have moved apart by up to the skin
-    since it was found. Two points' distance changes by at most |d_p - d_q| for displacements
-    d, which is at most twice the largest |d_i - c| for any c: with c the middle of the
-    displacements, a cloth or a body that moves as a whole keeps its list."""
+    since it was found (``spread_since``)."""
     if model.surface_triangles.shape[0] == 0:
         return pairs
-    found_at = pairs[2]
-    points = model.surface_points
-    low = np.full(3, np.inf)
-    high = np.full(3, -np.inf)
-    for k in range(points.shape[0]):
-        for c in range(3):
-            moved = x[points[k], c] - found_at[k, c]
-            low[c] = min(low[c], moved)
-            high[c] = max(high[c], moved)
-    middle = 0.5 * (low + high)
-    skin = surface_skin(model)
-    limit = 0.25 * skin * skin
-    for k in range(points.shape[0]):
-        p = points[k]
-        apart = ((x[p, 0] - found_at[k, 0] - middle[0]) ** 2
-                 + (x[p, 1] - found_at[k, 1] - middle[1]) ** 2
-                 + (x[p, 2] - found_at[k, 2] - middle[2]) ** 2)
-        if not apart <= limit:   # NaN too: a fresh search copes with it
-            return start_surface_pairs(model, x)
+    if not spread_since(model.surface_points, x, pairs[2]) <= 0.5 * surface_skin(model):
+        return start_surface_pairs(model, x)   # NaN too: a fresh search copes with it
     return pairs
+
+
+@kernel
+def spread_since(points, now, then):
+    """max_k |d_k - c| over the points, d_k = now - then, c the middle of the d's box (m); NaN
+    if any is, which keeps no list. Two points' distance changes by at most |d_p - d_q|, which
+    is at most twice this for any c: with c the middle of the displacements, a cloth or a body
+    that moves as a whole keeps its pair list."""
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for p in points:
+        for c in range(3):
+            moved = now[p, c] - then[p, c]
+            low[c], high[c] = min(low[c], moved), max(high[c], moved)
+    spread = 0.0
+    for p in points:
+        apart = math.sqrt((now[p, 0] - then[p, 0] - 0.5 * (low[0] + high[0])) ** 2
+                          + (now[p, 1] - then[p, 1] - 0.5 * (low[1] + high[1])) ** 2
+                          + (now[p, 2] - then[p, 2] - 0.5 * (low[2] + high[2])) ** 2)
+        if not apart <= spread:
+            spread = apart   # NaN too
+    return spread
 
 
 @kernel

@@ -39,6 +39,7 @@ from numba.typed import List
 
 from .._jit import kernel
 from ..proximity import surface_pairs
+from ..surface_collisions import spread_since
 
 REACH_SLACK = 0.5   # share of the largest thickness added to the reach a step needs
 SKIN = 2.0          # thicknesses the search reaches beyond that, so that its list can be kept
@@ -91,25 +92,6 @@ def one_body(model):
         if body[p] != first:
             return False
     return True
-
-
-@kernel
-def spread_since(points, now, then):
-    """max_k |d_k - c| over the points, d_k = now - then, c the middle of the d's box (m); NaN
-    if any is, which keeps no list."""
-    low, high = np.full(3, np.inf), np.full(3, -np.inf)
-    for p in points:
-        for c in range(3):
-            moved = now[p, c] - then[p, c]
-            low[c], high[c] = min(low[c], moved), max(high[c], moved)
-    spread = 0.0
-    for p in points:
-        apart = math.sqrt((now[p, 0] - then[p, 0] - 0.5 * (low[0] + high[0])) ** 2
-                          + (now[p, 1] - then[p, 1] - 0.5 * (low[1] + high[1])) ** 2
-                          + (now[p, 2] - then[p, 2] - 0.5 * (low[2] + high[2])) ** 2)
-        if not apart <= spread:
-            spread = apart   # NaN too
-    return spread
 
 
 @kernel
