@@ -33,7 +33,7 @@ ROWS = {
     "cloth-100-rk4": ("cloth-balls-100", "rk4", 0.0001, [], 1, "--seconds", "3"),
     "cloth-hang-100": ("cloth-hang", "implicit_euler", 0.016667, CLOTH_100, 1, "--seconds", "3"),
     "cloth-hang-200": ("cloth-hang", "implicit_euler", 0.016667,
-                       CLOTH_200 + ["bodies.0.thickness=0.008"], 1, "--steps", "20"),
+                       CLOTH_200, 1, "--steps", "20"),
     "cube-30": ("jelly-plane", "implicit_euler", 0.016667, CUBE_30, 1, "--seconds", "3"),
     "cube-100": ("jelly-plane", "rk4", 0.001, CUBE_100, 1, "--steps", "3"),
     "cube-100-2": ("jelly-plane", "rk4", 0.001, CUBE_100, 2, "--steps", "3"),

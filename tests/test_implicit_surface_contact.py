@@ -78,7 +78,7 @@ def test_a_fast_cube_does_not_pass_through_a_cloth(speed):
     thrown = cube((0.1, 2.0, -0.05), (0.0, -speed, 0.0))
     sim = springsim.Simulation(Scene(bodies=[cloth, thrown], dt=dt), integrator="implicit_euler")
     sheet = 15 * 15
-    rest = 0.5 * (cloth.thickness + THICKNESS)
+    rest = 0.5 * (cloth.contact_thickness() + THICKNESS)
     for _ in range(round(1.0 / dt)):
         sim.step(1)
         x = sim.positions

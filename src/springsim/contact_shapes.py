@@ -39,7 +39,8 @@ def surface_contact_arrays(specs, built, offsets) -> dict:
             "surface_triangles": all_triangles.astype(np.int64),
             "surface_edges": all_edges,
             **neighbour_arrays(all_edges, len(particle_body)),
-            "body_thickness": per_body("thickness", 0.0),
+            "body_thickness": np.array([s.contact_thickness() if s is not None else 0.0
+                                        for s in settings]),
             "body_self_collision": per_body("self_collision", False),
             "body_friction": per_body("friction", 0.0),
             "body_static_friction": per_body("static_friction", 0.0),

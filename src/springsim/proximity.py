@@ -173,8 +173,8 @@ def may_touch_triangle(body, self_collision, start, neighbours, triangles, p, t)
 def joined(start, neighbours, p, q):
     """Whether particles p and q share a surface edge."""
     for k in range(start[p], start[p + 1]):
-        if neighbours[k] == q:
-            return True
+        if neighbours[k] >= q:   # ascending
+            return neighbours[k] == q
     return False
 
 
@@ -216,7 +216,7 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
                 first = (ix * dims[1] + iy) * dims[2]
                 for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
                     f = members[k]
-                    if f > e and boxes_overlap(boxes, f, own) \
+                    if f > e and not shares_end(edges, e, f) and boxes_overlap(boxes, f, own) \
                             and may_touch_edge(body, self_collision, start, neighbours, edges,
                                                e, f) \
                             and edge_distance(x, edges, e, f) \
@@ -267,6 +267,14 @@ def boxes_overlap(boxes, f, own):
         if boxes[f, c] > own[0, 3 + c] or own[0, c] > boxes[f, 3 + c]:
             return False
     return True
+
+
+@kernel
+def shares_end(edges, e, f):
+    """Whether edges e and f have an end in common (then they never form a pair: tested first,
+    as it is cheap and most edges that the grid gives an edge are its neighbours)."""
+    return (edges[e, 0] == edges[f, 0] or edges[e, 0] == edges[f, 1]
+            or edges[e, 1] == edges[f, 0] or edges[e, 1] == edges[f, 1])
 
 
 @kernel

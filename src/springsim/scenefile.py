@@ -399,7 +399,7 @@ def check_values(node, prefix: str = "") -> None:
         elif _is_table_list(value):
             for i, item in enumerate(value):
                 check_values(item, f"{key}.{i}")
-        else:
+        elif value is not None or _default_of(field) is not None:   # None: left unset
             convert_field(type(node), field, _as_toml(value), MISSING, key)
 
 
@@ -441,8 +441,8 @@ def _table_lines(node, prefix: str, defaults=None) -> list[str]:
     lines, tables = [], []
     for name in init_fields(type(node)):
         value, key = getattr(node, name), f"{prefix}.{name}"
-        if _is_default(node, defaults, name):
-            continue
+        if value is None or _is_default(node, defaults, name):
+            continue   # None: unset, which TOML (no null) says by leaving the key out
         if dataclasses.is_dataclass(value):
             inner = _table_lines(value, key, getattr(defaults, name, None))
             tables += [f"[{key}]"] + inner

@@ -91,20 +91,25 @@ def spread_since(points, now, then):
     """max_k |d_k - c| over the points, d_k = now - then, c the middle of the d's box (m); NaN
     if any is, which keeps no list. Two points' distance changes by at most |d_p - d_q|, which
     is at most twice this for any c: with c the middle of the displacements, a cloth or a body
-    that moves as a whole keeps its pair list."""
-    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    that moves as a whole keeps its pair list. (Scalars, not small arrays, in the loops: this
+    runs every step, and it is the whole cost of contact where nothing touches.)"""
+    low0 = low1 = low2 = np.inf
+    high0 = high1 = high2 = -np.inf
     for p in points:
-        for c in range(3):
-            moved = now[p, c] - then[p, c]
-            low[c], high[c] = min(low[c], moved), max(high[c], moved)
-    spread = 0.0
+        d0, d1, d2 = now[p, 0] - then[p, 0], now[p, 1] - then[p, 1], now[p, 2] - then[p, 2]
+        low0, high0 = min(low0, d0), max(high0, d0)
+        low1, high1 = min(low1, d1), max(high1, d1)
+        low2, high2 = min(low2, d2), max(high2, d2)
+    c0, c1, c2 = 0.5 * (low0 + high0), 0.5 * (low1 + high1), 0.5 * (low2 + high2)
+    farthest = total = 0.0
     for p in points:
-        apart = math.sqrt((now[p, 0] - then[p, 0] - 0.5 * (low[0] + high[0])) ** 2
-                          + (now[p, 1] - then[p, 1] - 0.5 * (low[1] + high[1])) ** 2
-                          + (now[p, 2] - then[p, 2] - 0.5 * (low[2] + high[2])) ** 2)
-        if not apart <= spread:
-            spread = apart   # NaN too
-    return spread
+        apart = ((now[p, 0] - then[p, 0] - c0) ** 2 + (now[p, 1] - then[p, 1] - c1) ** 2
+                 + (now[p, 2] - then[p, 2] - c2) ** 2)
+        farthest = max(farthest, apart)
+        total += apart   # NaN or inf if any is: min and max may have passed over it
+    if not total < np.inf:
+        return np.nan
+    return math.sqrt(farthest)
 
 
 @kernel
@@ -114,6 +119,8 @@ def resolve_surface_contacts(model, x, v, start, pairs):
     if model.surface_triangles.shape[0] == 0:
         return pairs
     pairs = current_surface_pairs(model, x, pairs)
+    if pairs[0].shape[0] + pairs[1].shape[0] == 0:
+        return pairs
     contacts = surface_contacts(model, x, start, pairs[0], pairs[1])
     if contacts[0].shape[0] > 0:
         stuck = apply_impulses(model, v, contacts)
@@ -249,12 +256,26 @@ def split_mobilities(model, nodes, weights):
 def apply_impulses(model, v, contacts):
     """PASSES Jacobi passes of normal and friction impulses (module doc); returns which
     contacts stuck (static friction held them) in the last pass."""
+    return impulse_passes(model, v, contacts, np.zeros(contacts[0].shape[0]), True)
+
+
+@kernel
+def apply_friction(model, v, contacts, pushed):
+    """The friction passes of ``apply_impulses`` alone, each contact's normal impulse given
+    (``pushed``, N s: implicit_euler's penalty contacts push inside the solve,
+    implicit/contact_friction.py); returns which stuck."""
+    return impulse_passes(model, v, contacts, pushed.copy(), False)
+
+
+@kernel
+def impulse_passes(model, v, contacts, pushed, push):
+    """PASSES Jacobi passes: friction against the accumulated normal impulse ``pushed``, plus,
+    if ``push``, the normal impulses that stop each approach (adding to ``pushed``)."""
     nodes, weights, normal, depth, bodies = contacts
     count = nodes.shape[0]
     stuck = np.zeros(count, np.bool_)
     mobility = split_mobilities(model, nodes, weights)
     impulse = np.zeros((count, 3))      # this pass's, per contact
-    pushed = np.zeros(count)            # normal impulse applied so far
     rubbed = np.zeros((count, 3))       # friction impulse applied so far
     target = np.zeros(count)            # normal velocity wanted: -e (first approach), or 0
     relative = np.empty(3)
@@ -269,12 +290,14 @@ def apply_impulses(model, v, contacts):
                     relative[c] += weights[k, i] * v[nodes[k, i], c]
             approach = relative[0] * normal[k, 0] + relative[1] * normal[k, 1] \
                 + relative[2] * normal[k, 2]
-            if sweep == 0:
-                restitution = 0.5 * (model.body_restitution[bodies[k, 0]]
-                                     + model.body_restitution[bodies[k, 1]])
-                target[k] = -restitution * min(approach, 0.0)
-            j = max(target[k] - approach, 0.0) / mobility[k]
-            pushed[k] += j
+            j = 0.0
+            if push:
+                if sweep == 0:
+                    restitution = 0.5 * (model.body_restitution[bodies[k, 0]]
+                                         + model.body_restitution[bodies[k, 1]])
+                    target[k] = -restitution * min(approach, 0.0)
+                j = max(target[k] - approach, 0.0) / mobility[k]
+                pushed[k] += j
             stuck[k] = friction_impulse(model, k, bodies, relative, approach, normal,
                                         mobility[k], pushed[k], rubbed, impulse)
             for c in range(3):

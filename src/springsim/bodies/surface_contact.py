@@ -19,15 +19,25 @@ MAX_THICKNESS = 1.0   # m: beyond, contact would act across whole bodies (and se
 class SurfaceContact:
     """Contact keys; lengths in m. Each body kind sets its own defaults (docs: README)."""
 
-    thickness: float = 0.05          # kept between surfaces (m)
+    thickness: float | None = 0.05   # kept between surfaces (m); None: the kind's default
+                                     # for the body (default_thickness)
     self_collision: bool = False     # the body's surface also pushes on itself
     friction: float = 0.4            # kinetic Coulomb coefficient against other surfaces
     static_friction: float = 0.5     # a contact sticks while |f_T| <= static_friction |f_N|
     restitution: float = 0.0         # share of the approach speed given back by a contact
 
+    def contact_thickness(self) -> float:
+        """The thickness in use (m): the key, or where it is unset the body's default."""
+        return self.default_thickness() if self.thickness is None else self.thickness
+
+    def default_thickness(self) -> float:
+        """The thickness of a body whose key is unset (m); a kind may scale it with the body."""
+        return 0.05
+
     def validate_surface_contact(self, key: str) -> None:
         """Check the keys on their own (``validate_thickness`` checks them against the body)."""
-        require(is_finite(self.thickness) and 0 < self.thickness <= MAX_THICKNESS,
+        require(self.thickness is None
+                or (is_finite(self.thickness) and 0 < self.thickness <= MAX_THICKNESS),
                 f"{key}.thickness", self.thickness, f"must be in (0, {MAX_THICKNESS:g}] m")
         require(isinstance(self.self_collision, bool), f"{key}.self_collision",
                 self.self_collision, "must be true or false")
@@ -46,6 +56,7 @@ class SurfaceContact:
         size, so that a body too large to build is refused for its size."""
         if self.self_collision:
             spacing = self.surface_spacing()
-            require(self.thickness < 0.5 * spacing, f"{key}.thickness", self.thickness,
+            require(self.contact_thickness() < 0.5 * spacing, f"{key}.thickness",
+                    self.contact_thickness(),
                     f"must be below half the particle spacing ({0.5 * spacing:.4g} m) when "
                     "self_collision is on: neighbours would start in contact")

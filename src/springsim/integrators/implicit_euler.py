@@ -32,6 +32,7 @@ from ..forces import force_columns, spring_forces
 from ..implicit.ball_contact import (find_solve_contacts, linearize_contacts,
                                      newton_iterations_needed, update_active_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
+from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
@@ -133,6 +134,8 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
         add_scaled(dv, dv, 1.0, ddv)
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
+    apply_contact_friction(model, contacts, x_k, v_k, h)   # the penalty contacts' friction
+    add_scaled(x_k, x, h, v_k)
     x[:] = x_k
     last_change[:] = dv
     restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect

@@ -134,7 +134,7 @@ class Panel:
             changed, on = psim.Checkbox(f"{name} self-collision##{number}", body.self_collision)
             if changed:
                 c.set_self_collision(number, on)
-            self._number(f"{name} thickness (m)##{number}", body.thickness,
+            self._number(f"{name} thickness (m)##{number}", body.contact_thickness(),
                          lambda value, n=number: c.set_thickness(n, value), fmt="%.4f")
 
     def _bodies(self) -> None:

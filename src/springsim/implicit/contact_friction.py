@@ -1,0 +1,50 @@
+"""Coulomb friction of the solve's surface contacts, applied when the solve is done.
+
+Why: the penalty springs of ball_contact.py push inside the solve but have no friction, and a
+contact they hold at rest leaves the post-step pass (surface_collisions.py) no approach speed
+to stop, so no normal impulse to scale its friction by: a cube resting on another slid off it
+at about 0.065 m/s. Here each active surface contact's push over the step, its penalty force
+times h,
+    J_N = h k (-phi) = (h^2 k) (-phi) / h,      phi = n . sum_i c_i x_i(end of step) - R,
+is the normal impulse that bounds its friction (a cube at rest on another: J_N sums to m g h,
+what gravity gives in a step), and surface_collisions.apply_friction applies Coulomb friction
+against it (static, else kinetic; the same Jacobi passes with mass splitting, so the result
+depends on no order and conserves momentum) to the end-of-step velocities. The positions are
+then taken from those velocities, x + h v, so a contact that sticks does not slide during the
+step either. Balls keep the friction of collisions.py.
+"""
+import numpy as np
+
+from .._jit import kernel
+from ..surface_collisions import apply_friction
+from .ball_contact import EDGE_EDGE, POINT_TRIANGLE
+
+
+@kernel
+def apply_contact_friction(model, contacts, x_end, v, h):
+    """Friction of the active point-triangle and edge-edge contacts of the solve's contact set
+    ``contacts`` on the end-of-step velocities v, in place, against their penalty impulses at
+    the end-of-step positions ``x_end`` (module doc)."""
+    nodes, weights, normal, gap, coefficient, active, shape, rest = contacts
+    rows = np.empty(nodes.shape[0], np.int64)
+    count = 0
+    for p in range(nodes.shape[0]):
+        if active[p] and (shape[p] == POINT_TRIANGLE or shape[p] == EDGE_EDGE):
+            rows[count] = p
+            count += 1
+    if count == 0:
+        return
+    rows = rows[:count]
+    pushed = np.empty(count)
+    bodies = np.empty((count, 2), np.int64)
+    for k in range(count):
+        p = rows[k]
+        phi = -rest[p]
+        for i in range(4):
+            for c in range(3):
+                phi += weights[p, i] * normal[p, c] * x_end[nodes[p, i], c]
+        pushed[k] = coefficient[p] * max(-phi, 0.0) / h
+        bodies[k, 0] = model.particle_body[nodes[p, 0]]
+        bodies[k, 1] = model.particle_body[nodes[p, 3]]
+    apply_friction(model, v, (nodes[rows], weights[rows], normal[rows], np.zeros(count), bodies),
+                   pushed)
