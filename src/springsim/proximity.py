@@ -1,11 +1,12 @@
 """Broad phase of surface contact: the (point, triangle) and (edge, edge) pairs that may touch.
 
 Every triangle's and edge's bounding box, grown by the search ``reach``, goes into a uniform grid
-whose cells are as wide as the largest grown box, so that each box lies in at most 2 x 2 x 2
-cells, whatever the shapes' sizes (the ball grid of broadphase.py is sized from the largest
-ball instead). A point looks in its one cell for the boxes that hold it; an edge looks in the cells
-its own box overlaps. The grid is rebuilt from the positions on every call, a counting sort by
-cell; the cost grows like the shapes' count, not their product.
+whose cells are as wide as the largest grown box, each box in the one cell of its low corner
+(the ball grid of broadphase.py is sized from the largest ball instead). A point looks for the
+boxes that hold it in the 2 x 2 x 2 cells whose boxes can reach it; an edge, for the boxes that
+overlap its own, in the cells whose boxes can reach that. Each pair is met once. The grid is
+rebuilt from the positions on every call, a counting sort by cell; the cost grows like the
+shapes' count, not their product.
 
 Which pairs count: a point and a triangle, or two edges, of two bodies; or of one body that
 collides with itself, leaving out a point and a triangle with a corner that is the point or its
@@ -56,9 +57,12 @@ def shape_boxes(x, shapes, reach):
 
 @kernel
 def box_grid(boxes):
-    """A uniform grid of the boxes: (origin, cell size, dims, cell_start, members); cell
+    """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
+    as wide as the largest box: (origin, cell size, dims, cell_start, members); cell
     (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
-    members[cell_start[c]:cell_start[c + 1]], ascending."""
+    members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
+    [low, high] only if its cell lies between those of low - cell size and high
+    (``region_cells``), and each is met once."""
     count = boxes.shape[0]
     origin, extent = np.zeros(3), np.zeros(3)
     largest = 0.0
@@ -75,38 +79,33 @@ def box_grid(boxes):
     dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
+    home = np.empty(count, np.int64)
     cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
     for b in range(count):
-        x0, x1, y0, y1, z0, z1 = box_cells(boxes, b, origin, cell, dims)
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell_start[(ix * dims[1] + iy) * dims[2] + iz + 1] += 1
+        home[b] = ((cell_coordinate(boxes[b, 0], origin[0], cell, dims[0]) * dims[1]
+                    + cell_coordinate(boxes[b, 1], origin[1], cell, dims[1])) * dims[2]
+                   + cell_coordinate(boxes[b, 2], origin[2], cell, dims[2]))
+        cell_start[home[b] + 1] += 1
     for number in range(1, cell_start.shape[0]):
         cell_start[number] += cell_start[number - 1]
     cursor = cell_start[:-1].copy()
-    members = np.empty(cell_start[-1], np.int64)
+    members = np.empty(count, np.int64)
     for b in range(count):   # in box order: each cell's members ascend
-        x0, x1, y0, y1, z0, z1 = box_cells(boxes, b, origin, cell, dims)
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    number = (ix * dims[1] + iy) * dims[2] + iz
-                    members[cursor[number]] = b
-                    cursor[number] += 1
+        members[cursor[home[b]]] = b
+        cursor[home[b]] += 1
     return origin, cell, dims, cell_start, members
 
 
 @kernel
-def box_cells(boxes, b, origin, cell, dims):
-    """The first and last cell along x, y and z that box b overlaps (at most 2 each in its own
-    grid)."""
-    return (cell_coordinate(boxes[b, 0], origin[0], cell, dims[0]),
-            cell_coordinate(boxes[b, 3], origin[0], cell, dims[0]),
-            cell_coordinate(boxes[b, 1], origin[1], cell, dims[1]),
-            cell_coordinate(boxes[b, 4], origin[1], cell, dims[1]),
-            cell_coordinate(boxes[b, 2], origin[2], cell, dims[2]),
-            cell_coordinate(boxes[b, 5], origin[2], cell, dims[2]))
+def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims):
+    """The first and last cell along x, y and z whose boxes (box_grid) may overlap the region
+    [low, high]."""
+    return (cell_coordinate(low0 - cell, origin[0], cell, dims[0]),
+            cell_coordinate(high0, origin[0], cell, dims[0]),
+            cell_coordinate(low1 - cell, origin[1], cell, dims[1]),
+            cell_coordinate(high1, origin[1], cell, dims[1]),
+            cell_coordinate(low2 - cell, origin[2], cell, dims[2]),
+            cell_coordinate(high2, origin[2], cell, dims[2]))
 
 
 @kernel
@@ -120,7 +119,9 @@ def point_triangle_pairs(model, x, boxes, beyond, self_beyond):
     if count > found.shape[0]:   # a crowded step: now the count is known
         found = np.empty((count, 2), np.int64)
         collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found)
-    return found[:count]
+    found = found[:count]
+    # a point's triangles come cell by cell: sorted by (point, triangle)
+    return found[np.argsort(found[:, 0] * model.surface_triangles.shape[0] + found[:, 1])]
 
 
 @kernel
@@ -131,21 +132,24 @@ def collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found):
     corners = np.empty((3, 3))
     count = 0
     for p in model.surface_points:
-        number = (((cell_coordinate(x[p, 0], origin[0], cell, dims[0]) * dims[1])
-                   + cell_coordinate(x[p, 1], origin[1], cell, dims[1])) * dims[2]
-                  + cell_coordinate(x[p, 2], origin[2], cell, dims[2]))
-        for k in range(cell_start[number], cell_start[number + 1]):
-            t = members[k]
-            if inside_box(boxes, t, x[p, 0], x[p, 1], x[p, 2]) \
-                    and may_touch_triangle(model.particle_body, model.body_self_collision,
-                                           model.neighbour_start, model.neighbours, triangles,
-                                           p, t) \
-                    and point_triangle_distance(x, triangles, p, t, corners) \
-                    < search_distance(model.particle_body, model.body_thickness, p,
-                                      triangles[t, 0], beyond, self_beyond):
-                if count < found.shape[0]:
-                    found[count, 0], found[count, 1] = p, t
-                count += 1
+        x0, x1, y0, y1, z0, z1 = region_cells(x[p, 0], x[p, 1], x[p, 2], x[p, 0], x[p, 1],
+                                              x[p, 2], origin, cell, dims)
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                first = (ix * dims[1] + iy) * dims[2]
+                for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
+                    t = members[k]
+                    if inside_box(boxes, t, x[p, 0], x[p, 1], x[p, 2]) \
+                            and may_touch_triangle(model.particle_body,
+                                                   model.body_self_collision,
+                                                   model.neighbour_start, model.neighbours,
+                                                   triangles, p, t) \
+                            and point_triangle_distance(x, triangles, p, t, corners) \
+                            < search_distance(model.particle_body, model.body_thickness, p,
+                                              triangles[t, 0], beyond, self_beyond):
+                        if count < found.shape[0]:
+                            found[count, 0], found[count, 1] = p, t
+                        count += 1
     return count
 
 
@@ -191,7 +195,7 @@ def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
     if count > keys.shape[0]:   # a crowded step: now the count is known
         keys = np.empty(count, np.int64)
         collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys)
-    keys = np.unique(keys[:count])   # a pair met in several cells once, sorted
+    keys = np.sort(keys[:count])   # each pair is met once, in the grid's order
     pairs = np.empty((keys.shape[0], 2), np.int64)
     for k in range(keys.shape[0]):
         pairs[k, 0], pairs[k, 1] = keys[k] // edges.shape[0], keys[k] % edges.shape[0]
@@ -210,7 +214,8 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
     for e in range(edges.shape[0]):
         for c in range(3):   # e's own box: its grown box shrunk back
             own[0, c], own[0, 3 + c] = boxes[e, c] + reach, boxes[e, 3 + c] - reach
-        x0, x1, y0, y1, z0, z1 = box_cells(own, 0, origin, cell, dims)
+        x0, x1, y0, y1, z0, z1 = region_cells(own[0, 0], own[0, 1], own[0, 2], own[0, 3],
+                                              own[0, 4], own[0, 5], origin, cell, dims)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 first = (ix * dims[1] + iy) * dims[2]
