@@ -2,8 +2,10 @@
 
 (a) of the cloth-balls and jelly-plane presets with surface contact as it is and switched off
     (``self_collision = False`` on the cloth: with one surface body nothing else can touch; the
-    jelly cube does not collide with itself, so jelly-plane should cost the same both ways),
-    interleaved runs, 3 repetitions, the range of the ratio off / on;
+    jelly cube does not collide with itself, so jelly-plane should cost the same both ways):
+    the two simulations step the first 3.4 s (34,000 steps of cloth-balls, the span
+    ``springsim bench`` times, balls landing included) in alternating pieces of 1,000 steps, so
+    that the machine's drift hits both alike; 3 repetitions, the range of the ratio off / on;
 (b) a collapsing 25 x 25 cloth (default Cloth(), pinned="none", standing upright just above a
     plane, dt 1e-4) with self-collision: steps/s over the collapse (the issue's bar: >= 2,000);
 (c) a jelly-stack-like scene: three default cubes aligned, stacked 0.2 m apart on the plane.
@@ -33,6 +35,22 @@ def without_self_collision(scene: Scene) -> Scene:
         if hasattr(body, "self_collision"):
             body.self_collision = False
     return scene
+
+
+def interleaved(on_scene: Scene, off_scene: Scene, seconds: float, piece: int = 1000):
+    """Steps/s of the two scenes' rk4 simulations over their first ``seconds``, stepped in
+    alternating pieces of ``piece`` steps: (on, off)."""
+    simulations = [Simulation(scene, integrator="rk4") for scene in (on_scene, off_scene)]
+    for simulation in simulations:
+        simulation.step(1)   # compile or load the cache
+    spent = [0.0, 0.0]
+    steps = round(seconds / on_scene.dt)
+    for _ in range(steps // piece):
+        for k, simulation in enumerate(simulations):
+            began = time.perf_counter()
+            simulation.step(piece)
+            spent[k] += time.perf_counter() - began
+    return steps // piece * piece / spent[0], steps // piece * piece / spent[1]
 
 
 def steps_per_second(scene: Scene, steps: int, seconds_first: float = 0.0) -> float:
@@ -74,11 +92,10 @@ def main() -> None:
     for name in ("cloth-balls", "jelly-plane"):
         on_scene = preset(name)
         off_scene = without_self_collision(on_scene)
-        on, off = [], []
-        for _ in range(args.repeats):   # interleaved: drift hits both alike
-            on.append(steps_per_second(on_scene, args.steps))
-            off.append(steps_per_second(off_scene, args.steps))
-        ratios = np.array(off) / np.array(on)
+        seconds = 3.4 if name == "cloth-balls" else 3.0
+        runs = np.array([interleaved(on_scene, off_scene, seconds) for _ in range(args.repeats)])
+        on, off = runs[:, 0], runs[:, 1]
+        ratios = off / on
         print(f"{name:28s} {max(on):10.0f}/s {max(off):10.0f}/s "
               f"{ratios.min():6.2f}-{ratios.max():.2f}")
 
