@@ -256,3 +256,21 @@ def test_a_ball_starting_inside_a_terrain_is_named_by_its_own_key():
     scene = load_scene("jelly-balls", ["bodies.1.balls.2.position=[0, -1, 0]"])
     with pytest.raises(SceneError, match=r"bodies\.1\.balls\.2\.position = \(0\.0, -1\.0, 0\.0\)"):
         Simulation(scene)
+
+
+def test_an_unset_thickness_stays_unset_through_a_file(tmp_path):
+    """A cloth's thickness left unset is written as no key, so that read back and refined to
+    200 x 200 (spacing 2 cm) its thickness still follows the spacing and the self-colliding
+    cloth is accepted; a thickness set to 2 cm is kept, and refused there (it must stay below
+    half the spacing)."""
+    for thickness, accepted in ((None, True), (0.02, False)):
+        scene = preset("cloth-hang")
+        scene.bodies[0].thickness = thickness
+        path = write(tmp_path, scene_to_toml(scene), "cloth.toml")
+        if accepted:
+            cloth = load_scene(path, ["bodies.0.particles_per_edge=200"]).bodies[0]
+            assert cloth.thickness is None
+            assert 0 < cloth.contact_thickness() < 0.5 * cloth.surface_spacing()
+        else:
+            with pytest.raises(SceneError, match="bodies.0.thickness"):
+                load_scene(path, ["bodies.0.particles_per_edge=200"])

@@ -399,7 +399,7 @@ def check_values(node, prefix: str = "") -> None:
         elif _is_table_list(value):
             for i, item in enumerate(value):
                 check_values(item, f"{key}.{i}")
-        elif value is not None or _default_of(field) is not None:   # None: left unset
+        elif value is not None or not _may_be_unset(type(node), field):
             convert_field(type(node), field, _as_toml(value), MISSING, key)
 
 
@@ -523,6 +523,13 @@ def _default_of(field: dataclasses.Field):
     if field.default_factory is not MISSING:
         return field.default_factory()
     return MISSING
+
+
+def _may_be_unset(owner: type, field: dataclasses.Field) -> bool:
+    """Whether the field is annotated ``X | None``: None then means unset (the default)."""
+    annotation = typing.get_type_hints(owner).get(field.name, typing.Any)
+    return (typing.get_origin(annotation) in (typing.Union, types.UnionType)
+            and type(None) in typing.get_args(annotation))
 
 
 def _strip_optional(annotation):
