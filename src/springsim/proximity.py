@@ -58,7 +58,7 @@ def shape_boxes(x, shapes, reach):
 @kernel
 def box_grid(boxes):
     """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
-    as wide as the largest box: (origin, cell size, dims, cell_start, members); cell
+    as wide as the largest box: (origin, cell size, dims, cell_start, members, their boxes); cell
     (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
     members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
     [low, high] only if its cell lies between those of low - cell size and high
@@ -93,7 +93,12 @@ def box_grid(boxes):
     for b in range(count):   # in box order: each cell's members ascend
         members[cursor[home[b]]] = b
         cursor[home[b]] += 1
-    return origin, cell, dims, cell_start, members
+    # the members' boxes in the same order: a query then reads them from contiguous memory
+    member_boxes = np.empty((count, 6))
+    for k in range(count):
+        for c in range(6):
+            member_boxes[k, c] = boxes[members[k], c]
+    return origin, cell, dims, cell_start, members, member_boxes
 
 
 @kernel
@@ -127,7 +132,7 @@ def point_triangle_pairs(model, x, boxes, beyond, self_beyond):
 @kernel
 def collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found):
     """Count the pairs, writing them to ``found`` while it has room."""
-    origin, cell, dims, cell_start, members = grid
+    origin, cell, dims, cell_start, members, member_boxes = grid
     triangles = model.surface_triangles
     corners = np.empty((3, 3))
     count = 0
@@ -139,7 +144,7 @@ def collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found):
                 first = (ix * dims[1] + iy) * dims[2]
                 for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
                     t = members[k]
-                    if inside_box(boxes, t, x[p, 0], x[p, 1], x[p, 2]) \
+                    if inside_box(member_boxes, k, x[p, 0], x[p, 1], x[p, 2]) \
                             and may_touch_triangle(model.particle_body,
                                                    model.body_self_collision,
                                                    model.neighbour_start, model.neighbours,
@@ -206,7 +211,7 @@ def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
 def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
     """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` while it has
     room."""
-    origin, cell, dims, cell_start, members = grid
+    origin, cell, dims, cell_start, members, member_boxes = grid
     edges, body, self_collision = model.surface_edges, model.particle_body, model.body_self_collision
     start, neighbours = model.neighbour_start, model.neighbours
     own = np.empty((1, 6))
@@ -221,7 +226,8 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
                 first = (ix * dims[1] + iy) * dims[2]
                 for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
                     f = members[k]
-                    if f > e and not shares_end(edges, e, f) and boxes_overlap(boxes, f, own) \
+                    if f > e and boxes_overlap(member_boxes, k, own) \
+                            and not shares_end(edges, e, f) \
                             and may_touch_edge(body, self_collision, start, neighbours, edges,
                                                e, f) \
                             and edge_distance(x, edges, e, f) \
