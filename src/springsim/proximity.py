@@ -1,10 +1,11 @@
 """Broad phase of surface contact: the (point, triangle) and (edge, edge) pairs that may touch.
 
 Every triangle's and edge's bounding box, grown by the search ``reach``, goes into a uniform grid
-whose cells are as wide as the largest grown box, each box in the one cell of its low corner
-(the ball grid of broadphase.py is sized from the largest ball instead). A point looks for the
-boxes that hold it in the 2 x 2 x 2 cells whose boxes can reach it; an edge, for the boxes that
-overlap its own, in the cells whose boxes can reach that. Each pair is met once. The grid is
+whose cells are a third as wide as the largest grown box (CELLS_PER_BOX), each box in the one
+cell of its low corner (the ball grid of broadphase.py is sized from the largest ball instead).
+A point looks for the boxes that hold it in the cells from which a box can reach it (its own and
+up to 3 below it along each axis); an edge, for the boxes that overlap its own, likewise. Each
+pair is met once. The grid is
 rebuilt from the positions on every call, a counting sort by cell; the cost grows like the
 shapes' count, not their product.
 
@@ -22,6 +23,10 @@ import numpy as np
 from ._jit import kernel
 from .broadphase import MAX_CELLS_PER_PARTICLE, cell_coordinate, grid_cell_size
 from .geometry import closest_on_segments, closest_on_triangle
+
+CELLS_PER_BOX = 3.0   # grid cells across the largest box: the searches of a 100 x 100 and a
+                      # 25 x 25 cloth took 0.8 and 0.88 of their time with 1 cell at 2, 0.73
+                      # and 0.82 at 3 (more are capped by MAX_CELLS_PER_PARTICLE there)
 
 
 @kernel
@@ -58,10 +63,11 @@ def shape_boxes(x, shapes, reach):
 @kernel
 def box_grid(boxes):
     """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
-    as wide as the largest box: (origin, cell size, dims, cell_start, members, their boxes); cell
+    1 / CELLS_PER_BOX as wide as the largest box (wider where they would be too many):
+    (origin, cell size, dims, cell_start, members, their boxes, the largest box's size); cell
     (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
     members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
-    [low, high] only if its cell lies between those of low - cell size and high
+    [low, high] only if its cell lies between those of low - the largest size and high
     (``region_cells``), and each is met once."""
     count = boxes.shape[0]
     origin, extent = np.zeros(3), np.zeros(3)
@@ -75,7 +81,7 @@ def box_grid(boxes):
             origin[c], extent[c] = low, high - low
     if not largest < np.inf:
         largest = 1.0
-    cell = grid_cell_size(extent, largest, MAX_CELLS_PER_PARTICLE * count + 64)
+    cell = grid_cell_size(extent, largest / CELLS_PER_BOX, MAX_CELLS_PER_PARTICLE * count + 64)
     dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
@@ -98,18 +104,18 @@ def box_grid(boxes):
     for k in range(count):
         for c in range(6):
             member_boxes[k, c] = boxes[members[k], c]
-    return origin, cell, dims, cell_start, members, member_boxes
+    return origin, cell, dims, cell_start, members, member_boxes, largest
 
 
 @kernel
-def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims):
+def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims, largest):
     """The first and last cell along x, y and z whose boxes (box_grid) may overlap the region
     [low, high]."""
-    return (cell_coordinate(low0 - cell, origin[0], cell, dims[0]),
+    return (cell_coordinate(low0 - largest, origin[0], cell, dims[0]),
             cell_coordinate(high0, origin[0], cell, dims[0]),
-            cell_coordinate(low1 - cell, origin[1], cell, dims[1]),
+            cell_coordinate(low1 - largest, origin[1], cell, dims[1]),
             cell_coordinate(high1, origin[1], cell, dims[1]),
-            cell_coordinate(low2 - cell, origin[2], cell, dims[2]),
+            cell_coordinate(low2 - largest, origin[2], cell, dims[2]),
             cell_coordinate(high2, origin[2], cell, dims[2]))
 
 
@@ -132,13 +138,13 @@ def point_triangle_pairs(model, x, boxes, beyond, self_beyond):
 @kernel
 def collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found):
     """Count the pairs, writing them to ``found`` while it has room."""
-    origin, cell, dims, cell_start, members, member_boxes = grid
+    origin, cell, dims, cell_start, members, member_boxes, largest = grid
     triangles = model.surface_triangles
     corners = np.empty((3, 3))
     count = 0
     for p in model.surface_points:
         x0, x1, y0, y1, z0, z1 = region_cells(x[p, 0], x[p, 1], x[p, 2], x[p, 0], x[p, 1],
-                                              x[p, 2], origin, cell, dims)
+                                              x[p, 2], origin, cell, dims, largest)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 first = (ix * dims[1] + iy) * dims[2]
@@ -211,7 +217,7 @@ def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
 def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
     """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` while it has
     room."""
-    origin, cell, dims, cell_start, members, member_boxes = grid
+    origin, cell, dims, cell_start, members, member_boxes, largest = grid
     edges, body, self_collision = model.surface_edges, model.particle_body, model.body_self_collision
     start, neighbours = model.neighbour_start, model.neighbours
     own = np.empty((1, 6))
@@ -220,7 +226,8 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
         for c in range(3):   # e's own box: its grown box shrunk back
             own[0, c], own[0, 3 + c] = boxes[e, c] + reach, boxes[e, 3 + c] - reach
         x0, x1, y0, y1, z0, z1 = region_cells(own[0, 0], own[0, 1], own[0, 2], own[0, 3],
-                                              own[0, 4], own[0, 5], origin, cell, dims)
+                                              own[0, 4], own[0, 5], origin, cell, dims,
+                                              largest)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 first = (ix * dims[1] + iy) * dims[2]
