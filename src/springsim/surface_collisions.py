@@ -31,7 +31,7 @@ Every impulse and shift acts with weights summing to zero, so momentum is conser
 
 The pairs come from proximity.surface_pairs, searched SKIN thinnest thicknesses beyond contact,
 and are kept until the surface particles have moved apart by half the skin since (a Verlet
-list; moving together does not count: current_surface_pairs): a step where nothing touches
+list; moving together does not count: list_holds): a step where nothing touches
 costs two passes over the surface particles. A list found afresh gives the
 same contacts (the narrow phase decides), so results do not depend on when it was found.
 """
@@ -51,10 +51,16 @@ SKIN = 2.0          # the search reaches this many times the thinnest surface be
 @kernel
 def surface_skin(model):
     """How far beyond contact the pair search reaches (m): SKIN times the thinnest surface."""
+    return skin_of(model.body_thickness)
+
+
+@kernel
+def skin_of(thickness):
+    """SKIN times the thinnest of the bodies' ``thickness`` (m; zero: no surface)."""
     thinnest = np.inf
-    for b in range(model.body_thickness.shape[0]):
-        if model.body_thickness[b] > 0.0:
-            thinnest = min(thinnest, model.body_thickness[b])
+    for b in range(thickness.shape[0]):
+        if thickness[b] > 0.0:
+            thinnest = min(thinnest, thickness[b])
     return SKIN * thinnest
 
 
@@ -76,14 +82,12 @@ def start_surface_pairs(model, x):
 
 
 @kernel
-def current_surface_pairs(model, x, pairs):
-    """``pairs``, or a fresh list once the surface points have moved apart by up to the skin
-    since it was found (``spread_since``)."""
-    if model.surface_triangles.shape[0] == 0:
-        return pairs
-    if not spread_since(model.surface_points, x, pairs[2]) <= 0.5 * surface_skin(model):
-        return start_surface_pairs(model, x)   # NaN too: a fresh search copes with it
-    return pairs
+def list_holds(points, thickness, x, then):
+    """Whether a pair list found at the positions ``then`` still holds every pair within
+    reach: the surface points have moved apart by less than the skin since (``spread_since``;
+    NaN fails). Arrays, not the model: this runs every step, and each kernel call that takes
+    the model costs as much as its ~50 arrays (benchmarks show it at a few % of a step)."""
+    return spread_since(points, x, then) <= 0.5 * skin_of(thickness)
 
 
 @kernel
@@ -112,20 +116,29 @@ def spread_since(points, now, then):
     return math.sqrt(farthest)
 
 
-@kernel
+@inline_kernel
 def resolve_surface_contacts(model, x, v, start, pairs):
     """Apply the contacts of the pair list to (x, v) in place (module doc); ``start`` holds the
-    positions at the start of the step. Returns the list for the next step."""
+    positions at the start of the step. Returns the list for the next step: ``pairs``, or a
+    fresh one once it no longer holds (``list_holds``). Inlined, with the model passed on only
+    where there is a search or a contact: a step where nothing touches makes no call that
+    takes the model."""
     if model.surface_triangles.shape[0] == 0:
         return pairs
-    pairs = current_surface_pairs(model, x, pairs)
-    if pairs[0].shape[0] + pairs[1].shape[0] == 0:
-        return pairs
-    contacts = surface_contacts(model, x, start, pairs[0], pairs[1])
+    if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+        pairs = start_surface_pairs(model, x)   # NaN too: a fresh search copes with it
+    if pairs[0].shape[0] + pairs[1].shape[0] > 0:
+        respond_to_contacts(model, x, v, start, pairs[0], pairs[1])
+    return pairs
+
+
+@kernel
+def respond_to_contacts(model, x, v, start, point_pairs, edge_pairs):
+    """The touching pairs' impulses and overlap corrections (module doc)."""
+    contacts = surface_contacts(model, x, start, point_pairs, edge_pairs)
     if contacts[0].shape[0] > 0:
         stuck = apply_impulses(model, v, contacts)
         correct_overlaps(model, x, start, contacts, stuck)
-    return pairs
 
 
 @kernel
