@@ -5,9 +5,8 @@ whose cells are a third as wide as the largest grown box (CELLS_PER_BOX), each b
 cell of its low corner (the ball grid of broadphase.py is sized from the largest ball instead).
 A point looks for the boxes that hold it in the cells from which a box can reach it (its own and
 up to 3 below it along each axis); an edge, for the boxes that overlap its own, likewise. Each
-pair is met once. The grid is
-rebuilt from the positions on every call, a counting sort by cell; the cost grows like the
-shapes' count, not their product.
+pair is met once. The grid is rebuilt from the positions on every call, a counting sort by
+cell; the cost grows like the shapes' count, not their product.
 
 Which pairs count: a point and a triangle, or two edges, of two bodies; or of one body that
 collides with itself, leaving out a point and a triangle with a corner that is the point or its
@@ -234,7 +233,6 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
                 for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
                     f = members[k]
                     if f > e and boxes_overlap(member_boxes, k, own) \
-                            and not shares_end(edges, e, f) \
                             and may_touch_edge(body, self_collision, start, neighbours, edges,
                                                e, f) \
                             and edge_distance(x, edges, e, f) \
@@ -285,14 +283,6 @@ def boxes_overlap(boxes, f, own):
         if boxes[f, c] > own[0, 3 + c] or own[0, c] > boxes[f, 3 + c]:
             return False
     return True
-
-
-@kernel
-def shares_end(edges, e, f):
-    """Whether edges e and f have an end in common (then they never form a pair: tested first,
-    as it is cheap and most edges that the grid gives an edge are its neighbours)."""
-    return (edges[e, 0] == edges[f, 0] or edges[e, 0] == edges[f, 1]
-            or edges[e, 1] == edges[f, 0] or edges[e, 1] == edges[f, 1])
 
 
 @kernel

@@ -85,8 +85,8 @@ def start_surface_pairs(model, x):
 def list_holds(points, thickness, x, then):
     """Whether a pair list found at the positions ``then`` still holds every pair within
     reach: the surface points have moved apart by less than the skin since (``spread_since``;
-    NaN fails). Arrays, not the model: this runs every step, and each kernel call that takes
-    the model costs as much as its ~50 arrays (benchmarks show it at a few % of a step)."""
+    NaN fails). Arrays, not the model: it runs every step, and a step where nothing touches
+    is to make no call that takes the model's ~50 arrays."""
     return spread_since(points, x, then) <= 0.5 * skin_of(thickness)
 
 
@@ -277,7 +277,7 @@ def apply_friction(model, v, contacts, pushed):
     """The friction passes of ``apply_impulses`` alone, each contact's normal impulse given
     (``pushed``, N s: implicit_euler's penalty contacts push inside the solve,
     implicit/contact_friction.py); returns which stuck."""
-    return impulse_passes(model, v, contacts, pushed.copy(), False)
+    return impulse_passes(model, v, contacts, pushed, False)   # reads pushed, never writes it
 
 
 @kernel

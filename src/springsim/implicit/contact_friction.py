@@ -24,7 +24,8 @@ from .ball_contact import EDGE_EDGE, POINT_TRIANGLE
 def apply_contact_friction(model, contacts, x_end, v, h):
     """Friction of the active point-triangle and edge-edge contacts of the solve's contact set
     ``contacts`` on the end-of-step velocities v, in place, against their penalty impulses at
-    the end-of-step positions ``x_end`` (module doc)."""
+    the end-of-step positions ``x_end`` (module doc). Returns whether there was any (then the
+    positions are to be taken from v again)."""
     nodes, weights, normal, gap, coefficient, active, shape, rest = contacts
     rows = np.empty(nodes.shape[0], np.int64)
     count = 0
@@ -33,7 +34,7 @@ def apply_contact_friction(model, contacts, x_end, v, h):
             rows[count] = p
             count += 1
     if count == 0:
-        return
+        return False
     rows = rows[:count]
     pushed = np.empty(count)
     bodies = np.empty((count, 2), np.int64)
@@ -48,3 +49,4 @@ def apply_contact_friction(model, contacts, x_end, v, h):
         bodies[k, 1] = model.particle_body[nodes[p, 3]]
     apply_friction(model, v, (nodes[rows], weights[rows], normal[rows], np.zeros(count), bodies),
                    pushed)
+    return True

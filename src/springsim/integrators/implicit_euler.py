@@ -134,8 +134,8 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
         add_scaled(dv, dv, 1.0, ddv)
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
-    apply_contact_friction(model, contacts, x_k, v_k, h)   # the penalty contacts' friction
-    add_scaled(x_k, x, h, v_k)
+    if apply_contact_friction(model, contacts, x_k, v_k, h):   # the penalty contacts' friction
+        add_scaled(x_k, x, h, v_k)
     x[:] = x_k
     last_change[:] = dv
     restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect
