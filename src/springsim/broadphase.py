@@ -1,4 +1,6 @@
-"""Broad phase: the overlapping (ball, particle) pairs, found without testing every pair.
+"""Broad phase of the balls: the overlapping (ball, particle) pairs, found without testing every
+pair. (The surfaces' pairs are proximity.py's; both feed the one contact pass of
+surface_collisions.py and the contact set of implicit/ball_contact.py.)
 
 A contact is a pair (a, b) where a is a ball, b any other particle (a ball or a point) and
 |x_a - x_b| < r_a + r_b. A ball-ball contact is listed once, from the lower-numbered ball. Pairs

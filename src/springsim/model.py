@@ -37,8 +37,8 @@ class ModelArrays(NamedTuple):
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
-    # Body-body collisions (collisions.py). A ball is a particle with radius > 0 (only Balls bodies
-    # give radii); every other particle is a point.
+    # Ball contacts (surface_collisions.py). A ball is a particle with radius > 0 (only Balls
+    # bodies give radii); every other particle is a point.
     balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
     ball_slot: np.ndarray = np.empty(0, np.int64)             # (P,) row in the ball tables, or -1
     ball_restitution: np.ndarray = np.empty(0)                # (B,) ball-ball

@@ -1,11 +1,16 @@
-"""Body-body contact of surfaces: a point of one surface against a triangle of another (or of
-its own, for a self-colliding body), and two edges of self-colliding bodies.
+"""Body-body contact after the step: the one pass that every integrator runs, for every pair
+that touches. A point of one surface against a triangle of another (or of its own, for a
+self-colliding body), two edges of self-colliding bodies, and a ball against any particle or
+another ball.
 
 Each contact is a stencil of four particles with signed weights c that sum to zero: the gap
 vector d = sum_i c_i x_i runs from the triangle's closest point to the point
-(c = (1, -w_0, -w_1, -w_2), w the closest point's barycentric weights) or between the closest
-points of two edges (c = (1 - s, s, -(1 - t), -t)). A contact holds while the gap g along its
-normal n is below the pair's rest distance r (the mean of the two bodies' ``thickness``).
+(c = (1, -w_0, -w_1, -w_2), w the closest point's barycentric weights), between the closest
+points of two edges (c = (1 - s, s, -(1 - t), -t)), or from a ball's partner to the ball's
+centre (c = (1, -1, 0, 0)). A surface contact holds while the gap g along its normal n is below
+the pair's rest distance r (the mean of the two bodies' ``thickness``); a ball contact while
+the centres are closer than r_a + r_b (a partner that is not a ball is a point: r_b = 0), n the
+unit vector from the partner to the ball.
 
 Which side: the normal points to the side the pair was on at the start of the step, so a step
 that carried a point through a triangle (or an edge past an edge) pushes it back, not through.
@@ -14,26 +19,44 @@ corner), the direction of d. The search reaches a thickness either side: a step 
 point less than its thickness through a surface is always caught, and at the default time steps
 the fastest body moves a few millimetres a step against 2 to 5 cm of thickness.
 
-Response, after the integrator's step (like the ball impulses of collisions.py), in PASSES
-Jacobi passes: every contact's impulse is computed from the same velocities, then all are
-applied. With W = sum_i c_i^2 n_i / m_i, a contact approaching at v_N = n . sum_i c_i v_i < 0 gets the
-normal impulse that brings v_N to -e v_N (its first pass's), and a Coulomb friction impulse against
-the tangential velocity that sticks (stops it) while the accumulated friction stays within
-static_friction times the accumulated normal impulse, else slides with friction times it. Each
-contact's impulse is shared by its stencil, particle i getting c_i / m_i of it. n_i is how many
-contacts particle i takes part in: each contact sees 1 / n_i of its mass (mass splitting, Tonge,
+Response, after the integrator's step, in Jacobi passes: every contact's impulse is computed
+from the same velocities, then all are applied. With W = sum_i c_i^2 n_i / m_i, a contact
+approaching at v_N = n . sum_i c_i v_i < 0 gets the normal impulse that brings v_N to -e v_N
+(its first pass's), and a Coulomb friction impulse against the tangential velocity that sticks
+(stops it) while the accumulated friction stays within the static friction times the
+accumulated normal impulse, else slides with the kinetic friction times it. Each contact's
+impulse is shared by its stencil, particle i getting c_i / m_i of it. n_i is how many contacts
+particle i takes part in: each contact sees 1 / n_i of its mass (mass splitting, Tonge,
 Benevolenski and Voroshilov 2012), so that contacts sharing particles do not add up to several
-times the push, and the passes converge. Then each overlap is reduced by CORRECTION of its depth
-the same way.
+times the push, and the passes converge. Then each overlap is reduced by a share of its depth
+the same way, and a surface contact that static friction held has its sliding during the step
+taken back.
 Why Jacobi and not one contact after another (Gauss-Seidel): the result would depend on the
-contacts' order, so on the particle numbering, and a symmetric scene would not stay symmetric.
-Every impulse and shift acts with weights summing to zero, so momentum is conserved to rounding.
+contacts' order, so on the particle numbering, and a symmetric scene would not stay symmetric
+(tests/test_ball_contact_order.py: the balls' sequential pass, before they joined this one,
+failed both). Every impulse and shift acts with weights summing to zero, so momentum is
+conserved to rounding.
 
-The pairs come from proximity.surface_pairs, searched SKIN thinnest thicknesses beyond contact,
-and are kept until the surface particles have moved apart by half the skin since (a Verlet
-list; moving together does not count: list_holds): a step where nothing touches
-costs two passes over the surface particles. A list found afresh gives the
-same contacts (the narrow phase decides), so results do not depend on when it was found.
+Each contact carries its parameters (PARAMS):
+- surfaces: the means of the two bodies' restitution, friction and static friction,
+  CORRECTION of the depth a step, PASSES passes;
+- a ball and a particle: the ball's ``particle_restitution``, ``particle_friction`` (static and
+  kinetic alike) and ``position_correction``; a ball and a ball: the means of their
+  ``ball_restitution`` and ``position_correction``, no friction. A ball's contacts take
+  BALL_PASSES pass and no sliding back, as the course's reference resolved them (one impulse
+  each): a single contact gets exactly its impulse, j = -(1 + e) v_N / W, with the Coulomb
+  share of the sliding removed. Eight passes cost cloth-balls's 44 resting contacts 11 to 16 us
+  a step instead of 3 (timed in a compiled loop; a step is about 80 us).
+Under backward Euler the solve's penalty springs (implicit/ball_contact.py) take part of the
+approach speed first, so restitution reflects only what is left: a 10 kg ball hitting a free
+2 kg point at 3 m/s with e = 0.5 separates at 1.0 m/s rather than 1.5.
+
+The surface pairs come from proximity.surface_pairs, searched SKIN thinnest thicknesses beyond
+contact, and are kept until the surface particles have moved apart by half the skin since (a
+Verlet list; moving together does not count: list_holds): a step where nothing touches costs
+two passes over the surface particles. A list found afresh gives the same contacts (the narrow
+phase decides), so results do not depend on when it was found. The ball pairs are found every
+step (broadphase.find_contacts: balls are few and fast).
 """
 import math
 
@@ -41,10 +64,14 @@ import numpy as np
 
 from ._jit import inline_kernel, kernel
 from .geometry import closest_on_segments, closest_on_triangle, triangle_normal
+from .broadphase import find_contacts
 from .proximity import surface_pairs
 
 PASSES = 8          # Jacobi passes of the velocity impulses per step
 CORRECTION = 0.5    # share of an overlap removed per step
+BALL_PASSES = 1     # Jacobi passes of a ball's contacts (see the module doc)
+PARAMS = 6          # numbers per contact: restitution, kinetic and static friction, share of
+                    # the depth corrected, share of a stuck sliding taken back, passes
 SKIN = 2.0          # the search reaches this many times the thinnest surface beyond contact
 
 
@@ -117,54 +144,129 @@ def spread_since(points, now, then):
 
 
 @inline_kernel
-def resolve_surface_contacts(model, x, v, start, pairs):
-    """Apply the contacts of the pair list to (x, v) in place (module doc); ``start`` holds the
-    positions at the start of the step. Returns the list for the next step: ``pairs``, or a
-    fresh one once it no longer holds (``list_holds``). Inlined, with the model passed on only
-    where there is a search or a contact: a step where nothing touches makes no call that
-    takes the model."""
-    if model.surface_triangles.shape[0] == 0:
-        return pairs
-    if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+def resolve_contacts(model, x, v, start, pairs):
+    """Apply every body-body contact of (x, v) in place (module doc): those of the surface pair
+    list and those of the balls; ``start`` holds the positions at the start of the step.
+    Returns the surface list for the next step: ``pairs``, or a fresh one once it no longer
+    holds (``list_holds``). Inlined, with the model passed on only where there is a search or
+    a contact: a step where nothing touches makes no call that takes the model."""
+    if model.surface_triangles.shape[0] > 0 \
+            and not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
         pairs = start_surface_pairs(model, x)   # NaN too: a fresh search copes with it
-    if pairs[0].shape[0] + pairs[1].shape[0] > 0:
-        respond_to_contacts(model, x, v, start, pairs[0], pairs[1])
+    balls = ball_pairs(x, model.radius, model.balls, model.ball_slot)
+    if pairs[0].shape[0] + pairs[1].shape[0] + balls.shape[0] > 0:
+        respond_to_contacts(model, x, v, start, pairs[0], pairs[1], balls)
     return pairs
 
 
 @kernel
-def respond_to_contacts(model, x, v, start, point_pairs, edge_pairs):
-    """The touching pairs' impulses and overlap corrections (module doc)."""
-    contacts = surface_contacts(model, x, start, point_pairs, edge_pairs)
-    if contacts[0].shape[0] > 0:
-        stuck = apply_impulses(model, v, contacts)
-        correct_overlaps(model, x, start, contacts, stuck)
+def ball_pairs(x, radius, balls, ball_slot):
+    """The (ball, partner) pairs that overlap (broadphase.find_contacts; none without balls)."""
+    if balls.shape[0] == 0:
+        return np.empty((0, 2), np.int64)
+    return find_contacts(x, radius, balls, ball_slot)
 
 
 @kernel
-def surface_contacts(model, x, start, point_pairs, edge_pairs):
+def respond_to_contacts(model, x, v, start, point_pairs, edge_pairs, balls):
+    """The touching pairs' impulses and overlap corrections (module doc)."""
+    contacts = touching_contacts(model, x, start, point_pairs, edge_pairs, balls)
+    if contacts[0].shape[0] > 0:
+        mobility = split_mobilities(model.inv_mass, contacts[0], contacts[1])
+        stuck = apply_impulses(model.inv_mass, v, contacts, mobility)
+        correct_overlaps(model.inv_mass, x, start, contacts, stuck, mobility)
+
+
+@inline_kernel
+def touching_contacts(model, x, start, point_pairs, edge_pairs, balls):
     """The touching pairs as stencils: (nodes (K, 4), weights c (K, 4), normal n (K, 3),
-    depth r - g (K,), bodies (K, 2))."""
-    capacity = point_pairs.shape[0] + edge_pairs.shape[0]
+    depth (K,), their parameters (K, PARAMS): restitution, kinetic and static friction, the
+    share of the depth corrected a step and the share of a stuck contact's sliding in the step
+    taken back). Surfaces first (point-triangle, edge-edge), then balls."""
+    capacity = point_pairs.shape[0] + edge_pairs.shape[0] + balls.shape[0]
     nodes = np.empty((capacity, 4), np.int64)
     weights = np.empty((capacity, 4))
     normal = np.empty((capacity, 3))
     depth = np.empty(capacity)
-    bodies = np.empty((capacity, 2), np.int64)
+    params = np.empty((capacity, PARAMS))
+    bodies = np.empty((1, 2), np.int64)   # the touching pair's bodies, from the tests
     corners = np.empty((3, 3))   # work space of closest_on_triangle
     triangles, edges = model.surface_triangles, model.surface_edges
     body, thickness = model.particle_body, model.body_thickness
+    # the arrays read in the loops, taken from the model once (each read of one from the model
+    # inside them cost about 20 ns a contact)
+    surface_keys = surface_contact_keys(model)
+    ball_keys = (model.radius, model.ball_slot, model.ball_restitution,
+                 model.particle_restitution, model.particle_friction, model.position_correction)
     count = 0
     for k in range(point_pairs.shape[0]):
         if point_triangle_contact(triangles, body, thickness, x, start, point_pairs[k, 0],
                                   point_pairs[k, 1], count, nodes, weights, normal, depth,
                                   bodies, corners):
+            surface_params(surface_keys, bodies[0, 0], bodies[0, 1], params[count])
             count += 1
     for k in range(edge_pairs.shape[0]):
         if edge_edge_contact(edges, body, thickness, x, start, edge_pairs[k, 0],
                              edge_pairs[k, 1], count, nodes, weights, normal, depth, bodies):
+            surface_params(surface_keys, bodies[0, 0], bodies[0, 1], params[count])
             count += 1
-    return nodes[:count], weights[:count], normal[:count], depth[:count], bodies[:count]
+    for k in range(balls.shape[0]):
+        if ball_contact(ball_keys, x, balls[k, 0], balls[k, 1], count, nodes, weights, normal,
+                        depth, params):
+            count += 1
+    return nodes[:count], weights[:count], normal[:count], depth[:count], params[:count]
+
+
+@inline_kernel
+def surface_contact_keys(model):
+    """The bodies' restitution, kinetic and static friction (surface_params reads them)."""
+    return model.body_restitution, model.body_friction, model.body_static_friction
+
+
+@inline_kernel
+def surface_params(keys, first, second, out):
+    """A surface contact's parameters between bodies ``first`` and ``second`` (the means of
+    their ``keys``, surface_contact_keys; CORRECTION of the depth a step; a stuck contact's
+    sliding all taken back) into ``out`` (PARAMS,)."""
+    restitution, kinetic, static = keys
+    out[0] = 0.5 * (restitution[first] + restitution[second])
+    out[1] = 0.5 * (kinetic[first] + kinetic[second])
+    out[2] = 0.5 * (static[first] + static[second])
+    out[3] = CORRECTION
+    out[4] = 1.0
+    out[5] = PASSES
+
+
+@inline_kernel
+def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
+    """Fill contact ``row`` for ball a and particle (or ball) b if they overlap: the stencil
+    (1, -1) along n, the unit vector from b to a, depth r_a + r_b - |x_a - x_b|. ``keys``: the
+    model's radius, ball_slot and ball tables (touching_contacts)."""
+    radius, ball_slot, ball_restitution, particle_restitution, particle_friction, correction = keys
+    dx, dy, dz = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
+    distance = math.sqrt(dx * dx + dy * dy + dz * dz)
+    overlap = radius[a] + radius[b] - distance
+    if not overlap > 0.0:
+        return False
+    if distance > 0.0:
+        normal[row, 0], normal[row, 1], normal[row, 2] = dx / distance, dy / distance, dz / distance
+    else:   # concentric: any direction separates them; choose up
+        normal[row, 0], normal[row, 1], normal[row, 2] = 0.0, 1.0, 0.0
+    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = a, b, b, b
+    weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -1.0, 0.0, 0.0
+    depth[row] = overlap
+    ball, other = ball_slot[a], ball_slot[b]
+    if other >= 0:   # ball-ball: the means of both balls' keys, no friction
+        params[row, 0] = 0.5 * (ball_restitution[ball] + ball_restitution[other])
+        params[row, 1] = params[row, 2] = 0.0
+        params[row, 3] = 0.5 * (correction[ball] + correction[other])
+    else:
+        params[row, 0] = particle_restitution[ball]
+        params[row, 1] = params[row, 2] = particle_friction[ball]
+        params[row, 3] = correction[ball]
+    params[row, 4] = 0.0   # friction on the velocities only, as the reference's balls
+    params[row, 5] = BALL_PASSES
+    return True
 
 
 @inline_kernel
@@ -206,7 +308,7 @@ def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, node
     weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -w0, -w1, -w2
     normal[row, 0], normal[row, 1], normal[row, 2] = n0, n1, n2
     depth[row] = rest - gap
-    bodies[row, 0], bodies[row, 1] = body[p], body[a]
+    bodies[0, 0], bodies[0, 1] = body[p], body[a]
     return True
 
 
@@ -244,59 +346,64 @@ def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weight
     normal[row, 1] = sign * d1 / distance
     normal[row, 2] = sign * d2 / distance
     depth[row] = rest - sign * distance
-    bodies[row, 0], bodies[row, 1] = body[a], body[c]
+    bodies[0, 0], bodies[0, 1] = body[a], body[c]
     return True
 
 
 @kernel
-def split_mobilities(model, nodes, weights):
+def split_mobilities(inv_mass, nodes, weights):
     """(K,) W = sum_i c_i^2 n_i / m_i, each particle's mass split among the n_i contacts it
     takes part in (module doc)."""
-    count = np.zeros(model.inv_mass.shape[0], np.int32)
+    count = np.zeros(inv_mass.shape[0], np.int32)
     for k in range(nodes.shape[0]):
         for i in range(4):
-            count[nodes[k, i]] += 1
+            if weights[k, i] != 0.0:   # a ball's stencil pads its two nodes with zeros
+                count[nodes[k, i]] += 1
     mobility = np.empty(nodes.shape[0])
     for k in range(nodes.shape[0]):
         total = 0.0
         for i in range(4):
-            total += weights[k, i] ** 2 * model.inv_mass[nodes[k, i]] * count[nodes[k, i]]
+            total += weights[k, i] ** 2 * inv_mass[nodes[k, i]] * count[nodes[k, i]]
         mobility[k] = total
     return mobility
 
 
 @kernel
-def apply_impulses(model, v, contacts):
-    """PASSES Jacobi passes of normal and friction impulses (module doc); returns which
-    contacts stuck (static friction held them) in the last pass."""
-    return impulse_passes(model, v, contacts, np.zeros(contacts[0].shape[0]), True)
+def apply_impulses(inv_mass, v, contacts, mobility):
+    """PASSES Jacobi passes of normal and friction impulses (module doc; ``mobility``:
+    split_mobilities); returns which contacts stuck (static friction held them) in the last
+    pass."""
+    return impulse_passes(inv_mass, v, contacts, mobility, np.zeros(contacts[0].shape[0]), True)
 
 
 @kernel
-def apply_friction(model, v, contacts, pushed):
+def apply_friction(inv_mass, v, contacts, pushed):
     """The friction passes of ``apply_impulses`` alone, each contact's normal impulse given
     (``pushed``, N s: implicit_euler's penalty contacts push inside the solve,
     implicit/contact_friction.py); returns which stuck."""
-    return impulse_passes(model, v, contacts, pushed, False)   # reads pushed, never writes it
+    mobility = split_mobilities(inv_mass, contacts[0], contacts[1])
+    return impulse_passes(inv_mass, v, contacts, mobility, pushed, False)   # never writes pushed
 
 
 @kernel
-def impulse_passes(model, v, contacts, pushed, push):
+def impulse_passes(inv_mass, v, contacts, mobility, pushed, push):
     """PASSES Jacobi passes: friction against the accumulated normal impulse ``pushed``, plus,
     if ``push``, the normal impulses that stop each approach (adding to ``pushed``)."""
-    nodes, weights, normal, depth, bodies = contacts
+    nodes, weights, normal, depth, params = contacts
     count = nodes.shape[0]
     stuck = np.zeros(count, np.bool_)
-    mobility = split_mobilities(model, nodes, weights)
     impulse = np.zeros((count, 3))      # this pass's, per contact
     rubbed = np.zeros((count, 3))       # friction impulse applied so far
     target = np.zeros(count)            # normal velocity wanted: -e (first approach), or 0
     relative = np.empty(3)
-    for sweep in range(PASSES):
+    passes = 0
+    for k in range(count):
+        passes = max(passes, int(params[k, 5]))
+    for sweep in range(passes):
         for k in range(count):
             impulse[k, 0] = impulse[k, 1] = impulse[k, 2] = 0.0
-            if not mobility[k] > 0.0:
-                continue   # every particle of the stencil pinned
+            if not (mobility[k] > 0.0 and sweep < params[k, 5]):
+                continue   # every particle of the stencil pinned, or its passes done
             for c in range(3):
                 relative[c] = 0.0
                 for i in range(4):
@@ -306,32 +413,28 @@ def impulse_passes(model, v, contacts, pushed, push):
             j = 0.0
             if push:
                 if sweep == 0:
-                    restitution = 0.5 * (model.body_restitution[bodies[k, 0]]
-                                         + model.body_restitution[bodies[k, 1]])
-                    target[k] = -restitution * min(approach, 0.0)
+                    target[k] = -params[k, 0] * min(approach, 0.0)   # restitution
                 j = max(target[k] - approach, 0.0) / mobility[k]
                 pushed[k] += j
-            stuck[k] = friction_impulse(model, k, bodies, relative, approach, normal,
-                                        mobility[k], pushed[k], rubbed, impulse)
+            stuck[k] = friction_impulse(k, params, relative, approach, normal, mobility[k],
+                                        pushed[k], rubbed, impulse)
             for c in range(3):
                 impulse[k, c] += j * normal[k, c]
         for k in range(count):
             for i in range(4):
-                share = weights[k, i] * model.inv_mass[nodes[k, i]]
+                share = weights[k, i] * inv_mass[nodes[k, i]]
                 for c in range(3):
                     v[nodes[k, i], c] += share * impulse[k, c]
     return stuck
 
 
 @inline_kernel
-def friction_impulse(model, k, bodies, relative, approach, normal, mobility, pushed, rubbed,
-                     impulse):
+def friction_impulse(k, params, relative, approach, normal, mobility, pushed, rubbed, impulse):
     """Set impulse[k] to this pass's friction: the change of the accumulated friction ``rubbed``
-    that stops the sliding, kept within static_friction x ``pushed`` or else cut to
-    friction x ``pushed`` (Coulomb; ``mobility`` is the split W). Returns whether it sticks."""
-    first, second = bodies[k, 0], bodies[k, 1]
-    kinetic = 0.5 * (model.body_friction[first] + model.body_friction[second])
-    static = 0.5 * (model.body_static_friction[first] + model.body_static_friction[second])
+    that stops the sliding, kept within the static friction (params[k, 2]) x ``pushed`` or else
+    cut to the kinetic (params[k, 1]) x ``pushed`` (Coulomb; ``mobility`` is the split W).
+    Returns whether it sticks (never without friction)."""
+    kinetic, static = params[k, 1], params[k, 2]
     w0 = rubbed[k, 0] - (relative[0] - approach * normal[k, 0]) / mobility
     w1 = rubbed[k, 1] - (relative[1] - approach * normal[k, 1]) / mobility
     w2 = rubbed[k, 2] - (relative[2] - approach * normal[k, 2]) / mobility
@@ -343,35 +446,34 @@ def friction_impulse(model, k, bodies, relative, approach, normal, mobility, pus
     impulse[k, 0], impulse[k, 1], impulse[k, 2] = (w0 - rubbed[k, 0], w1 - rubbed[k, 1],
                                                    w2 - rubbed[k, 2])
     rubbed[k, 0], rubbed[k, 1], rubbed[k, 2] = w0, w1, w2
-    return sticks
+    return sticks and static > 0.0   # a frictionless contact has no sliding to take back
 
 
 @kernel
-def correct_overlaps(model, x, start, contacts, stuck):
+def correct_overlaps(inv_mass, x, start, contacts, stuck, mobility):
     """Move each touching stencil apart by CORRECTION of its depth, and take back the sliding
     of a stuck one during the step, shared like the impulses (module doc). All shifts are
     found from the same positions before any is made (Jacobi, as the impulses)."""
-    nodes, weights, normal, depth, bodies = contacts
-    mobility = split_mobilities(model, nodes, weights)
+    nodes, weights, normal, depth, params = contacts
     shift = np.zeros((nodes.shape[0], 3))
     for k in range(nodes.shape[0]):
         if not mobility[k] > 0.0:
             continue
-        push = CORRECTION * max(depth[k], 0.0)
+        push = params[k, 3] * max(depth[k], 0.0)   # the contact's share of its depth
         for c in range(3):
             shift[k, c] = push * normal[k, c]
-        if stuck[k]:
+        if stuck[k] and params[k, 4] > 0.0:
             slid = np.zeros(3)
             for i in range(4):
                 for c in range(3):
                     slid[c] += weights[k, i] * (x[nodes[k, i], c] - start[nodes[k, i], c])
             along = slid[0] * normal[k, 0] + slid[1] * normal[k, 1] + slid[2] * normal[k, 2]
             for c in range(3):
-                shift[k, c] -= slid[c] - along * normal[k, c]
+                shift[k, c] -= params[k, 4] * (slid[c] - along * normal[k, c])
         for c in range(3):
             shift[k, c] /= mobility[k]
     for k in range(nodes.shape[0]):
         for i in range(4):
-            share = weights[k, i] * model.inv_mass[nodes[k, i]]
+            share = weights[k, i] * inv_mass[nodes[k, i]]
             for c in range(3):
                 x[nodes[k, i], c] += share * shift[k, c]

@@ -5,8 +5,8 @@ each of its surface particles against the other body's surface triangles (contac
 surface_contact.py, proximity.py). ``thickness`` (m) is how far apart the surfaces are kept: a
 particle and a triangle of two bodies are kept the mean of their thicknesses apart, those of one
 self-colliding body its thickness. A pair's friction and restitution are the means of the two
-bodies' values. Balls are not in this pipeline: they touch every particle through their own
-(collisions.py), with their own keys.
+bodies' values. Balls are in the same contact pass but touch every particle (as a point), with
+their own keys (balls.py).
 """
 from dataclasses import dataclass
 

@@ -1,16 +1,17 @@
 """Ball-particle and surface contact inside the backward-Euler solve: stiff one-sided penalty
 springs.
 
-Why: collisions.py resolves ball-particle contact after the step (an impulse with restitution
-and a position correction of 0.15 of the penetration). The solve alone knows nothing of the ball,
-so at large steps it pulls the cloth particles into the ball faster than the correction pushes
-them out, and a dropped or thrown ball ends up under the cloth. Here the contacts are forces of
-the backward-Euler system, so the springs of the cloth and the ball feel them in the same step.
+Why: the post-step pass (surface_collisions.py) resolves ball-particle contact after the step
+(an impulse with restitution and a position correction of 0.15 of the penetration). The solve
+alone knows nothing of the ball, so at large steps it pulls the cloth particles into the ball
+faster than the correction pushes them out, and a dropped or thrown ball ends up under the
+cloth. Here the contacts are forces of the backward-Euler system, so the springs of the cloth
+and the ball feel them in the same step.
 
 Each step, every (ball a, point b) pair that the step could bring into contact is a candidate:
 the broad phase (``broadphase.find_contacts``) run on the predicted positions x + h (v + dv),
 with each ball's radius grown by the distance the step can close, h (|v_a| + the fastest point's
-speed), plus REACH_SLACK of its radius. Ball-ball pairs are left to collisions.py (they bounce).
+speed), plus REACH_SLACK of its radius. Ball-ball pairs are left to the post-step pass (they bounce).
 
 A particle of a sheet (a cloth: model.sheet_triangles) is touched through its triangles, not as
 a point: every triangle with a corner within that reach (grown by the longest triangle edge) is
@@ -60,10 +61,10 @@ becomes active, and the system is solved again (a few passes at most).
 
 Every term acts with weights c_i that sum to zero, so the contacts conserve momentum like the
 springs do: the ball feels the reaction of every point it pushes, a surface that of every
-surface it pushes. The impulse passes of collisions.py and surface_collisions.py still run after
-the step, unchanged: they remove what approach speed the penalty leaves and part of the small
+surface it pushes. The post-step impulse passes (surface_collisions.py) still run after the
+step, unchanged: they remove what approach speed the penalty leaves and part of the small
 penetration, and apply restitution and friction to it (the penalty itself is inelastic and
-frictionless, so restitution only reflects what is left: see collisions.py). A contact the
+frictionless, so restitution only reflects what is left: see surface_collisions.py). A contact the
 penalty already holds at rest gets next to no normal impulse there, so next to no friction: the
 surface contacts' friction is applied when the solve is done, against the penalty's own push
 (contact_friction.py).
@@ -196,7 +197,7 @@ def find_ball_pairs(model, x, v, h):
     for k in range(found.shape[0]):
         a, b = found[k, 0], found[k, 1]
         if model.ball_slot[b] >= 0:
-            continue   # ball-ball pairs are collisions.py's
+            continue   # ball-ball pairs are the post-step pass's
         if start[b + 1] == start[b]:
             if distance_squared(predicted, a, b) < (reach[a] - longest_edge) ** 2:
                 points[n_points, 0], points[n_points, 1] = a, b
@@ -285,7 +286,7 @@ def stencil(shape, estimate, start, c, n):
     if length > 0.0:
         n[0], n[1], n[2] = d0 / length, d1 / length, d2 / length
         return True
-    n[0], n[1], n[2] = 0.0, 1.0, 0.0   # concentric: choose up, as collisions.py does
+    n[0], n[1], n[2] = 0.0, 1.0, 0.0   # concentric: choose up, as the post-step pass does
     return shape == BALL_POINT or shape == BALL_TRIANGLE
 
 

@@ -11,12 +11,12 @@ what gravity gives in a step), and surface_collisions.apply_friction applies Cou
 against it (static, else kinetic; the same Jacobi passes with mass splitting, so the result
 depends on no order and conserves momentum) to the end-of-step velocities. The positions are
 then taken from those velocities, x + h v, so a contact that sticks does not slide during the
-step either. Balls keep the friction of collisions.py.
+step either. Ball contacts keep the friction of the post-step pass.
 """
 import numpy as np
 
 from .._jit import kernel
-from ..surface_collisions import apply_friction
+from ..surface_collisions import PARAMS, apply_friction, surface_contact_keys, surface_params
 from .ball_contact import EDGE_EDGE, POINT_TRIANGLE
 
 
@@ -37,7 +37,8 @@ def apply_contact_friction(model, contacts, x_end, v, h):
         return False
     rows = rows[:count]
     pushed = np.empty(count)
-    bodies = np.empty((count, 2), np.int64)
+    params = np.empty((count, PARAMS))
+    keys, body = surface_contact_keys(model), model.particle_body
     for k in range(count):
         p = rows[k]
         phi = -rest[p]
@@ -45,8 +46,7 @@ def apply_contact_friction(model, contacts, x_end, v, h):
             for c in range(3):
                 phi += weights[p, i] * normal[p, c] * x_end[nodes[p, i], c]
         pushed[k] = coefficient[p] * max(-phi, 0.0) / h
-        bodies[k, 0] = model.particle_body[nodes[p, 0]]
-        bodies[k, 1] = model.particle_body[nodes[p, 3]]
-    apply_friction(model, v, (nodes[rows], weights[rows], normal[rows], np.zeros(count), bodies),
-                   pushed)
+        surface_params(keys, body[nodes[p, 0]], body[nodes[p, 3]], params[k])
+    contacts = (nodes[rows], weights[rows], normal[rows], np.zeros(count), params)
+    apply_friction(model.inv_mass, v, contacts, pushed)
     return True

@@ -3,7 +3,7 @@
 Each method is a step function ``step(model, state, scratch, h)`` that advances ``state`` (a tuple
 whose first two entries are the positions x and velocities v, changed in place) by one step h,
 using the work arrays in ``scratch``. ``drive`` takes whole steps with it: step, then everything
-that follows every integrator's update (``finish_step``: impacts, collisions, the divergence
+that follows every integrator's update (``finish_step``: impacts, body-body contact, the divergence
 check). Each integrator file binds its step in a two-line cached kernel,
 ``advance = drive(its_step, model, state, its_scratch(x), h, steps)``.
 
@@ -18,10 +18,9 @@ import numpy as np
 from numba import prange
 
 from .._jit import inline_kernel, kernel
-from ..collisions import resolve_body_collisions
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import resolve_surface_contacts, start_surface_pairs
+from ..surface_collisions import resolve_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -43,9 +42,9 @@ def drive(step, model, state, scratch, h, steps):
 
 @kernel
 def step_start(model, x):
-    """Room for the positions at the start of a step, which surface contact reads (none
+    """Room for the positions at the start of a step, which body-body contact reads (none
     without it)."""
-    if model.surface_triangles.shape[0] == 0:
+    if model.surface_triangles.shape[0] == 0 and model.balls.shape[0] == 0:
         return np.empty((0, 3))
     return np.empty_like(x)
 
@@ -113,11 +112,10 @@ def is_diverged(vx, vy, vz, position):
 
 @inline_kernel
 def finish_step(model, x, v, start, pairs):
-    """Everything after the integrator's update: terrain impacts, body-body collisions (balls,
-    then surfaces, from the step's ``start`` positions and the surface pair list), then the
-    divergence check. Returns (first diverged particle or -1, the pair list for the next
-    step)."""
+    """Everything after the integrator's update: terrain impacts, body-body contact (balls
+    and surfaces in one set, from the step's ``start`` positions and the surface pair list),
+    then the divergence check. Returns (first diverged particle or -1, the pair list for the
+    next step)."""
     resolve_terrain_impacts(model, x, v)
-    resolve_body_collisions(model, x, v)
-    pairs = resolve_surface_contacts(model, x, v, start, pairs)
+    pairs = resolve_contacts(model, x, v, start, pairs)
     return first_diverged(x, v), pairs

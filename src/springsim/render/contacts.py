@@ -1,7 +1,8 @@
 """Where body-body surface contacts are, for drawing them: no window, only the contact kernels.
 
 The contacts of a state are those the step's own narrow phase would find there
-(surface_collisions.surface_contacts, with the state as its own start): each is a stencil of
+(surface_collisions.touching_contacts, with the state as its own start; ball contacts are
+not drawn): each is a stencil of
 signed weights c over four particles. Its point is the second side's closest point,
 -sum of c_i x_i over the negative weights (the triangle's closest point, or the second edge's);
 its normal points from there towards the first side (the touching point or edge). The drawn
@@ -12,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..proximity import surface_pairs
-from ..surface_collisions import surface_contacts, surface_skin
+from ..surface_collisions import surface_skin, touching_contacts
 
 NORMAL_LENGTH = 2.0   # drawn normals, in rest distances (thicknesses) of their pair
 
@@ -38,7 +39,10 @@ def contact_marks(arrays, x) -> ContactMarks:
         return ContactMarks(empty, empty, empty)
     skin = surface_skin(arrays)
     point_pairs, edge_pairs = surface_pairs(arrays, x, skin, skin)
-    nodes, weights, normals, _, bodies = surface_contacts(arrays, x, x, point_pairs, edge_pairs)
+    no_balls = np.empty((0, 2), np.int64)
+    nodes, weights, normals, _, _ = touching_contacts(arrays, x, x, point_pairs, edge_pairs,
+                                                      no_balls)
+    bodies = arrays.particle_body[nodes[:, [0, 3]]]   # the first and the second side's
     second_side = np.minimum(weights, 0.0)
     points = -np.einsum("kn,knc->kc", second_side, x[nodes])
     rest = 0.5 * arrays.body_thickness[bodies].sum(axis=1)
