@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from springsim.bodies.cloth import Cloth
-from springsim.render.contacts import contact_marks, has_surface_contact
+from springsim.render.contacts import contact_marks, has_body_contact
 from springsim.scene import Scene
 from springsim.simulation import Simulation
 from springsim.springs import SpringParameters
@@ -100,9 +100,9 @@ def test_an_edge_crossing_a_ridge_touches_between_their_closest_points():
 def test_a_model_without_touching_surfaces_has_no_contacts():
     single = Cloth(particles_per_edge=2, bend=NO_SPRINGS, self_collision=False)
     model = Simulation(Scene(name="one", bodies=[single], terrains=[])).model
-    assert not has_surface_contact(model)
+    assert not has_body_contact(model)
     assert contact_marks(model.arrays, model.initial_positions).points.shape == (0, 3)
-    assert has_surface_contact(two_cells())
+    assert has_body_contact(two_cells())
 
 
 def test_the_drawing_shows_the_contacts_only_while_toggled_on():
@@ -164,3 +164,41 @@ def test_render_draws_the_contacts_when_asked(tmp_path):
         r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
         red[draw] = int(np.count_nonzero((r > 150) & (g < 80) & (b < 80)))
     assert red["surfaces"] == 0 and red["contacts"] > 20
+
+
+# -- balls: their contacts are drawn too ---------------------------------------------------------
+
+def ball_and_points(ball_height, second_ball=False):
+    """A ball of radius 0.5 m ``ball_height`` above a free point at the origin (and, if
+    ``second_ball``, another ball of radius 0.25 m touching the first from beside, 1 cm deep)."""
+    from springsim.bodies.balls import Ball, Balls
+
+    balls = [Ball(position=(0.0, ball_height, 0.0), radius=0.5)]
+    if second_ball:
+        balls.append(Ball(position=(0.74, ball_height, 0.0), radius=0.25))
+    points = Cloth(particles_per_edge=2, bend=NO_SPRINGS, self_collision=False, pinned="none",
+                   width=10.0, height=10.0, position=(0.0, -50.0, 0.0))
+    simulation = Simulation(Scene(name="ball", bodies=[points, Balls(balls=balls)],
+                                  terrains=[]))
+    x = simulation.positions.copy()
+    x[0] = (0.0, 0.0, 0.0)   # one cloth particle under the ball; the others far below
+    return simulation.model, x
+
+
+def test_a_ball_touching_a_point_is_drawn_at_the_point_towards_the_ball():
+    model, x = ball_and_points(0.45)
+    assert has_body_contact(model)
+    marks = contact_marks(model.arrays, x)
+    assert len(marks.points) == 1
+    np.testing.assert_allclose(marks.points[0], (0.0, 0.0, 0.0), atol=1e-12)
+    np.testing.assert_allclose(marks.normals[0], (0.0, 1.0, 0.0), atol=1e-12)
+    np.testing.assert_allclose(marks.ends[0], (0.0, 0.25, 0.0), atol=1e-12)   # half the radius
+    assert len(contact_marks(model.arrays, ball_and_points(0.55)[1]).points) == 0
+
+
+def test_two_balls_touching_are_drawn_on_the_second_balls_surface():
+    model, x = ball_and_points(3.0, second_ball=True)   # the point is far: balls only
+    marks = contact_marks(model.arrays, x)
+    assert len(marks.points) == 1
+    np.testing.assert_allclose(marks.normals[0], (-1.0, 0.0, 0.0), atol=1e-12)
+    np.testing.assert_allclose(marks.points[0], (0.74 - 0.25, 3.0, 0.0), atol=1e-12)

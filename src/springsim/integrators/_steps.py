@@ -42,9 +42,9 @@ def drive(step, model, state, scratch, h, steps):
 
 @kernel
 def step_start(model, x):
-    """Room for the positions at the start of a step, which body-body contact reads (none
-    without it)."""
-    if model.surface_triangles.shape[0] == 0 and model.balls.shape[0] == 0:
+    """Room for the positions at the start of a step, which surface contact reads (none
+    without it: ball contacts do not read them)."""
+    if model.surface_triangles.shape[0] == 0:
         return np.empty((0, 3))
     return np.empty_like(x)
 

@@ -1,21 +1,23 @@
-"""Where body-body surface contacts are, for drawing them: no window, only the contact kernels.
+"""Where body-body contacts are, for drawing them: no window, only the contact kernels.
 
 The contacts of a state are those the step's own narrow phase would find there
-(surface_collisions.touching_contacts, with the state as its own start; ball contacts are
-not drawn): each is a stencil of
-signed weights c over four particles. Its point is the second side's closest point,
--sum of c_i x_i over the negative weights (the triangle's closest point, or the second edge's);
-its normal points from there towards the first side (the touching point or edge). The drawn
-normal is a segment twice the pair's rest distance (the mean of the two bodies' thicknesses).
+(surface_collisions.touching_contacts, with the state as its own start): each is a stencil of
+signed weights c over four particles. Its point is on the second side: the closest point
+-sum of c_i x_i over the negative weights (the triangle's closest point, the second edge's, or
+a ball's partner), moved out by the partner's radius if it is a ball; its normal points from
+there towards the first side (the touching point, edge or ball). The drawn normal is a segment
+twice the pair's rest distance (the mean of the two bodies' thicknesses) long, or for a ball's
+contact half the ball's radius.
 """
 from typing import NamedTuple
 
 import numpy as np
 
 from ..proximity import surface_pairs
-from ..surface_collisions import surface_skin, touching_contacts
+from ..surface_collisions import ball_pairs, surface_skin, touching_contacts
 
 NORMAL_LENGTH = 2.0   # drawn normals, in rest distances (thicknesses) of their pair
+BALL_NORMAL_LENGTH = 0.5   # a ball's drawn contact normals, in its radii
 
 
 class ContactMarks(NamedTuple):
@@ -24,27 +26,32 @@ class ContactMarks(NamedTuple):
     ends: np.ndarray      # (K, 3) m: the far ends of the drawn normal segments
 
 
-def has_surface_contact(model) -> bool:
-    """Whether ``model`` has surfaces that can touch (a replay's recorded model has none)."""
-    triangles = getattr(model.arrays, "surface_triangles", None)
-    return triangles is not None and len(triangles) > 0
+def has_body_contact(model) -> bool:
+    """Whether ``model`` has bodies that can touch: surfaces or balls (a replay's recorded
+    model has neither)."""
+    arrays = model.arrays
+    if not hasattr(arrays, "surface_triangles"):
+        return False   # a replay: its arrays hold what is drawn, not what touches
+    return len(arrays.surface_triangles) > 0 or len(arrays.balls) > 0
 
 
 def contact_marks(arrays, x) -> ContactMarks:
-    """The surface contacts of positions ``x`` (P, 3) in a model with ``arrays``
+    """The body-body contacts of positions ``x`` (P, 3) in a model with ``arrays``
     (model.ModelArrays)."""
     x = np.ascontiguousarray(x, dtype=np.float64)
-    if len(arrays.surface_triangles) == 0:
-        empty = np.empty((0, 3))
-        return ContactMarks(empty, empty, empty)
-    skin = surface_skin(arrays)
-    point_pairs, edge_pairs = surface_pairs(arrays, x, skin, skin)
-    no_balls = np.empty((0, 2), np.int64)
+    no_pairs = np.empty((0, 2), np.int64)
+    point_pairs = edge_pairs = no_pairs
+    if len(arrays.surface_triangles) > 0:
+        skin = surface_skin(arrays)
+        point_pairs, edge_pairs = surface_pairs(arrays, x, skin, skin)
+    balls = ball_pairs(x, arrays.radius, arrays.balls, arrays.ball_slot)
     nodes, weights, normals, _, _ = touching_contacts(arrays, x, x, point_pairs, edge_pairs,
-                                                      no_balls)
-    bodies = arrays.particle_body[nodes[:, [0, 3]]]   # the first and the second side's
+                                                      balls)
     second_side = np.minimum(weights, 0.0)
     points = -np.einsum("kn,knc->kc", second_side, x[nodes])
+    points += arrays.radius[nodes[:, 3]][:, None] * normals   # a ball partner's surface
+    bodies = arrays.particle_body[nodes[:, [0, 3]]]   # the first and the second side's
     rest = 0.5 * arrays.body_thickness[bodies].sum(axis=1)
-    ends = points + NORMAL_LENGTH * rest[:, None] * normals
-    return ContactMarks(points, normals, ends)
+    ball = arrays.radius[nodes[:, 0]]   # the first side's radius: a ball's contact, if > 0
+    length = np.where(ball > 0.0, BALL_NORMAL_LENGTH * ball, NORMAL_LENGTH * rest)
+    return ContactMarks(points, normals, points + length[:, None] * normals)

@@ -15,7 +15,7 @@ from ..errors import require
 from ..springs import SpringKind
 from ..surfaces import body_surface
 from . import colors
-from .contacts import contact_marks, has_surface_contact
+from .contacts import contact_marks, has_body_contact
 
 
 @dataclass
@@ -127,7 +127,7 @@ class SceneDrawing:
             drawn.part = self.parts[-1]
 
     def _add_contacts(self) -> None:
-        if not has_surface_contact(self.model):
+        if not has_body_contact(self.model):
             return
         drawn = _ContactDrawing(self.model.arrays, 0.15 * self.spacing)
         self.parts.append(_Part(drawn, "contacts", drawn.follow))

@@ -8,7 +8,7 @@ import polyscope.imgui as psim
 
 from ..integrators import integrator_names
 from ..presets import preset_names
-from ..render.contacts import has_surface_contact
+from ..render.contacts import has_body_contact
 from ..springs import SpringKind
 from .controls import TERRAINS
 
@@ -154,7 +154,7 @@ class Panel:
         if psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
             model = self.controls.sim.model
             draw_toggles(self.controls.draw, model.spring_kind, self.viewer.set_drawn,
-                         contacts=has_surface_contact(model))
+                         contacts=has_body_contact(model))
 
     def _view_and_mouse(self) -> None:
         c, viewer = self.controls, self.viewer
