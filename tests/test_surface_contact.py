@@ -303,6 +303,32 @@ def test_contact_is_bit_identical_for_one_and_two_threads():
         assert np.array_equal(run.velocities, runs[0].velocities)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "implicit_euler"])
+def test_one_step_a_call_is_bit_identical_to_one_call_and_keeps_the_pair_list(integrator):
+    """The pair list lives on between calls (Integrator.pair_list), so stepping one step a
+    call searches no more than one call does; the list decides nothing, so the trajectory is
+    the same to the bit. Then a state far from the list's (the start again) is searched
+    afresh, and again gives the same trajectory."""
+    dt = 2e-4 if integrator == "rk4" else 1 / 60
+    steps = 300 if integrator == "rk4" else 30
+    whole, single = contact_rich(integrator), contact_rich(integrator)
+    whole.dt = single.dt = dt
+    start = single.state.copy()
+    whole.step(steps)
+    searched_at = set()
+    for _ in range(steps):
+        single.step(1)
+        searched_at.add(id(single.integrator.pair_list(single.model)[2]))
+    assert np.array_equal(single.positions, whole.positions)
+    assert np.array_equal(single.velocities, whole.velocities)
+    assert len(searched_at) < steps / 10   # the list was kept between most calls
+    kept = single.integrator.pair_list(single.model)
+    single.state = start
+    single.step(steps)
+    assert single.integrator.pair_list(single.model)[2] is not kept[2]   # searched again
+    assert np.array_equal(single.positions, whole.positions)
+
+
 # -- a flat cloth of any resolution lists no pair of its own --------------------------------
 
 @pytest.mark.parametrize("particles_per_edge", [10, 25, 60, 100])

@@ -20,24 +20,39 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import resolve_contacts, start_surface_pairs
+from ..surface_collisions import list_holds, resolve_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
 
 @inline_kernel
-def drive(step, model, state, scratch, h, steps):
-    """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1)."""
+def drive(step, model, state, scratch, h, steps, pairs):
+    """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1, the
+    body-body pair list for the next call). ``pairs`` is the list the last call left (or
+    none): kept while it still holds for the positions now (surface_collisions.list_holds),
+    however they came about."""
     x, v = state[0], state[1]
-    pairs = start_surface_pairs(model, x)
+    pairs = pairs_now(model, x, pairs)
     start = step_start(model, x)
     for done in range(steps):
         copy_positions(start, x)
         step(model, state, scratch, h)
         particle, pairs = finish_step(model, x, v, start, pairs)
         if particle >= 0:
-            return done + 1, particle
-    return steps, -1
+            return done + 1, particle, pairs
+    return steps, -1, pairs
+
+
+@kernel
+def pairs_now(model, x, pairs):
+    """``pairs`` if it holds for the positions x (found at as many particles, moved apart by
+    less than the skin since), else a fresh search."""
+    if model.surface_triangles.shape[0] == 0:
+        return pairs
+    if pairs[2].shape[0] == x.shape[0] \
+            and list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+        return pairs
+    return start_surface_pairs(model, x)
 
 
 @kernel

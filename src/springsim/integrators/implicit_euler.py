@@ -169,8 +169,9 @@ def implicit_euler_step(model, state, scratch, h):
 
 @kernel
 def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_iterations,
-            kind, terrain, normal_floor, friction_damping, last_change, statistics):
-    """Take ``steps`` steps; returns (steps done, first diverged particle or -1).
+            kind, terrain, normal_floor, friction_damping, last_change, statistics, pairs):
+    """Take ``steps`` steps; returns (steps done, first diverged particle or -1, the
+    post-step pass's pair list: _steps.drive).
 
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
     call) to the next, last_change the velocity change; statistics[0] and [1] count the
@@ -178,7 +179,8 @@ def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_ite
     scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x),
                statistics)
     return drive(implicit_euler_step, model, (x, v, kind, terrain, normal_floor,
-                                              friction_damping, last_change), scratch, h, steps)
+                                              friction_damping, last_change), scratch, h, steps,
+                 pairs)
 
 
 @register
@@ -220,10 +222,12 @@ class ImplicitEuler(Integrator):
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
         # the contacts carried between steps live in the state (state.ContactMemory)
-        done, particle = advance(model.arrays, self.pattern(model), state.positions,
-                                 state.velocities, float(dt), int(steps), self.newton_iterations,
-                                 self.cg_tolerance, self.cg_max_iterations, *state.contacts,
-                                 self.statistics)
+        done, particle, pairs = advance(model.arrays, self.pattern(model), state.positions,
+                                        state.velocities, float(dt), int(steps),
+                                        self.newton_iterations, self.cg_tolerance,
+                                        self.cg_max_iterations, *state.contacts,
+                                        self.statistics, self.pair_list(model))
+        self.keep_pair_list(model, pairs)
         return int(done), int(particle)
 
 

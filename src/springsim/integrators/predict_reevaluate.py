@@ -36,14 +36,14 @@ def predict_reevaluate_step(model, state, scratch, h):
 
 
 @kernel
-def advance(model, x, v, h, steps):
-    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
+def advance(model, x, v, h, steps, pairs):
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
-def parallel_advance(model, x, v, h, steps):
+def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps)
+    return drive(predict_reevaluate_step, model, (x, v), two_stage_scratch(x), h, steps, pairs)
 
 
 @register

@@ -72,14 +72,14 @@ def rk4_scratch(x):
 
 
 @kernel
-def advance(model, x, v, h, steps):
-    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
+def advance(model, x, v, h, steps, pairs):
+    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
-def parallel_advance(model, x, v, h, steps):
+def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps)
+    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps, pairs)
 
 
 @register

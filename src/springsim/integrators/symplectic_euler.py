@@ -15,14 +15,14 @@ def symplectic_euler_step(model, state, scratch, h):
 
 
 @kernel
-def advance(model, x, v, h, steps):
-    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
+def advance(model, x, v, h, steps, pairs):
+    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
-def parallel_advance(model, x, v, h, steps):
+def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps)
+    return drive(symplectic_euler_step, model, (x, v), one_stage_scratch(x), h, steps, pairs)
 
 
 @register
