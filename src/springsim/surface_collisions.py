@@ -63,8 +63,8 @@ import math
 import numpy as np
 
 from ._jit import inline_kernel, kernel
-from .geometry import closest_on_segments, closest_on_triangle, triangle_normal
 from .broadphase import find_contacts
+from .geometry import closest_on_segments, closest_on_triangle, triangle_normal
 from .proximity import surface_pairs
 
 PASSES = 8          # Jacobi passes of the velocity impulses per step
@@ -249,7 +249,9 @@ def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
     if not overlap > 0.0:
         return False
     if distance > 0.0:
-        normal[row, 0], normal[row, 1], normal[row, 2] = dx / distance, dy / distance, dz / distance
+        normal[row, 0] = dx / distance
+        normal[row, 1] = dy / distance
+        normal[row, 2] = dz / distance
     else:   # concentric: any direction separates them; choose up
         normal[row, 0], normal[row, 1], normal[row, 2] = 0.0, 1.0, 0.0
     nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = a, b, b, b
