@@ -55,7 +55,10 @@ The surface pairs come from proximity.surface_pairs, searched SKIN thinnest thic
 contact, and are kept until the surface particles have moved apart by half the skin since (a
 Verlet list; moving together does not count: list_holds): a step where nothing touches costs
 two passes over the surface particles. A list found afresh gives the same contacts (the narrow
-phase decides), so results do not depend on when it was found. The ball pairs are found every
+phase decides), so results do not depend on when it was found, with one exception: a point
+carried through a face by between one and two rest distances is caught (the side test), but
+a kept list only promises the pairs within one rest distance, so whether that point is caught
+can depend on when the list was found. The ball pairs are found every
 step (broadphase.find_contacts: balls are few and fast).
 """
 import math
@@ -372,9 +375,9 @@ def split_mobilities(inv_mass, nodes, weights):
 
 @kernel
 def apply_impulses(inv_mass, v, contacts, mobility):
-    """PASSES Jacobi passes of normal and friction impulses (module doc; ``mobility``:
-    split_mobilities); returns which contacts stuck (static friction held them) in the last
-    pass."""
+    """The Jacobi passes of normal and friction impulses (module doc; each contact takes part in
+    params[k, 5] of them; ``mobility``: split_mobilities); returns which contacts stuck (static
+    friction held them) in their last pass."""
     return impulse_passes(inv_mass, v, contacts, mobility, np.zeros(contacts[0].shape[0]), True)
 
 
@@ -389,8 +392,9 @@ def apply_friction(inv_mass, v, contacts, pushed):
 
 @kernel
 def impulse_passes(inv_mass, v, contacts, mobility, pushed, push):
-    """PASSES Jacobi passes: friction against the accumulated normal impulse ``pushed``, plus,
-    if ``push``, the normal impulses that stop each approach (adding to ``pushed``)."""
+    """Jacobi passes, as many as the contact that takes most (params[:, 5]): friction against
+    the accumulated normal impulse ``pushed``, plus, if ``push``, the normal impulses that stop
+    each approach (adding to ``pushed``)."""
     nodes, weights, normal, depth, params = contacts
     count = nodes.shape[0]
     stuck = np.zeros(count, np.bool_)
@@ -453,9 +457,10 @@ def friction_impulse(k, params, relative, approach, normal, mobility, pushed, ru
 
 @kernel
 def correct_overlaps(inv_mass, x, start, contacts, stuck, mobility):
-    """Move each touching stencil apart by CORRECTION of its depth, and take back the sliding
-    of a stuck one during the step, shared like the impulses (module doc). All shifts are
-    found from the same positions before any is made (Jacobi, as the impulses)."""
+    """Move each touching stencil apart by its share of its depth (params[k, 3]), and take back
+    params[k, 4] of the sliding of a stuck one during the step (all for surfaces, none for
+    balls), shared like the impulses (module doc). All shifts are found from the same positions
+    before any is made (Jacobi, as the impulses)."""
     nodes, weights, normal, depth, params = contacts
     shift = np.zeros((nodes.shape[0], 3))
     for k in range(nodes.shape[0]):

@@ -5,7 +5,8 @@ whose first two entries are the positions x and velocities v, changed in place) 
 using the work arrays in ``scratch``. ``drive`` takes whole steps with it: step, then everything
 that follows every integrator's update (``finish_step``: impacts, body-body contact, the divergence
 check). Each integrator file binds its step in a two-line cached kernel,
-``advance = drive(its_step, model, state, its_scratch(x), h, steps)``.
+``advance = drive(its_step, model, state, its_scratch(x), h, steps, pairs)``, where ``pairs`` is
+the body-body pair list the last call left (Integrator.pair_list), returned for the next.
 
 Why ``drive`` is inlined rather than a kernel that takes the step as an argument: Numba types a
 function passed as an argument by the identity of its dispatcher object, which is new in every
@@ -20,7 +21,7 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import list_holds, resolve_contacts, start_surface_pairs
+from ..surface_collisions import resolve_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -29,8 +30,8 @@ SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold,
 def drive(step, model, state, scratch, h, steps, pairs):
     """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1, the
     body-body pair list for the next call). ``pairs`` is the list the last call left (or
-    none): kept while it still holds for the positions now (surface_collisions.list_holds),
-    however they came about."""
+    none): kept while it still holds (surface_collisions.list_holds) for the positions after
+    each step, however they came about."""
     x, v = state[0], state[1]
     pairs = pairs_now(model, x, pairs)
     start = step_start(model, x)
@@ -45,12 +46,11 @@ def drive(step, model, state, scratch, h, steps, pairs):
 
 @kernel
 def pairs_now(model, x, pairs):
-    """``pairs`` if it holds for the positions x (found at as many particles, moved apart by
-    less than the skin since), else a fresh search."""
-    if model.surface_triangles.shape[0] == 0:
-        return pairs
-    if pairs[2].shape[0] == x.shape[0] \
-            and list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+    """``pairs``, or a fresh search where there is none yet (or it was found for another
+    number of particles). Whether it still holds is checked before each use, after the step
+    (surface_collisions.resolve_contacts), as within one call: so stepping one step a call
+    searches at the same steps as one call of many."""
+    if model.surface_triangles.shape[0] == 0 or pairs[2].shape[0] == x.shape[0]:
         return pairs
     return start_surface_pairs(model, x)
 
