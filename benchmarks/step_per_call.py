@@ -1,12 +1,14 @@
 """What stepping one step a call costs against one call of many steps (issue 10: the body-body
 pair list is kept between calls, Integrator.pair_list).
 
-    .venv/bin/python benchmarks/step_per_call.py [SCENE] [--steps 2000]
+    .venv/bin/python benchmarks/step_per_call.py [SCENE] [--steps 2000] [--integrator NAME]
+        [--dt SECONDS]
 
-The scene (default cloth-balls, rk4 at its dt, one thread) is first advanced 1 s (the balls on
-the cloth), then ``--steps`` steps are taken one per ``Simulation.step(1)`` call, then as many
-in one call; each is timed with time.perf_counter. Before the list was kept, every call began
-with a pair search.
+The scene (default cloth-balls, at its integrator and dt unless given, one thread) is first
+advanced 1 s (the balls on the cloth), then ``--steps`` steps are taken one per
+``Simulation.step(1)`` call, then as many in one call; each is timed with time.perf_counter.
+Before the list was kept, every call began with a pair search (and implicit_euler's solve with
+one of its own).
 """
 import argparse
 import time
@@ -19,8 +21,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scene", nargs="?", default="cloth-balls")
     parser.add_argument("--steps", type=int, default=2000)
+    parser.add_argument("--integrator")
+    parser.add_argument("--dt", type=float)
     args = parser.parse_args()
-    simulation = Simulation(preset(args.scene), threads=1)
+    simulation = Simulation(preset(args.scene), integrator=args.integrator, dt=args.dt, threads=1)
     simulation.step(1)   # compile or load the cache
     simulation.advance(1.0)
     began = time.perf_counter()

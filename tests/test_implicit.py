@@ -359,7 +359,8 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
     arrays = simulation.model.arrays
     pattern = simulation.integrator.pattern(simulation.model)
     contacts = simulation.state.contacts
-    work = workspace(pattern, simulation.positions)
+    work = workspace(pattern, simulation.positions,
+                     simulation.integrator.solve_pair_list(simulation.model, simulation.positions))
     statistics = np.zeros(2, np.int64)
     touched = False
     for _ in range(12):
