@@ -25,7 +25,7 @@ class Integrator:
     name = ""
     order = 0
     summary = ""
-    _kept = None   # (the model, its body-body pair list) after the last call
+    _kept_for = None   # the model whose things are kept (model_cache)
 
     def __init__(self, **options):
         if options:
@@ -41,12 +41,17 @@ class Integrator:
         while it holds, whatever the state's positions are now), or none yet. Why: a search
         costs several steps (0.7 ms on cloth-balls against 0.08 ms a step), and stepping one
         step a call, as a script that records every step does, paid it every call."""
-        if self._kept is not None and self._kept[0] is model:
-            return self._kept[1]
-        return NO_PAIRS
+        return self.model_cache(model).get("pairs", NO_PAIRS)
 
     def keep_pair_list(self, model, pairs) -> None:
-        self._kept = (model, pairs)
+        self.model_cache(model)["pairs"] = pairs
+
+    def model_cache(self, model) -> dict:
+        """What this integrator keeps for ``model`` between calls (pair lists, a solve's
+        layout); a new model (a Simulation rebuilt by an edit) starts with nothing."""
+        if self._kept_for is not model:
+            self._kept_for, self._kept = model, {}
+        return self._kept
 
 
 class KernelIntegrator(Integrator):

@@ -211,8 +211,6 @@ class ImplicitEuler(Integrator):
         self.cg_max_iterations = int(cg_max_iterations)
         # running totals, for diagnostics: conjugate-gradient iterations, linear solves
         self.statistics = np.zeros(2, np.int64)
-        self._model = self._pattern = None
-        self._solve_pairs = None   # (the model, its solve's kept pair list)
 
     def solve_pair_list(self, model, x):
         """The solve's surface pair list (implicit/surface_contact.py), kept from call to call
@@ -220,17 +218,18 @@ class ImplicitEuler(Integrator):
         still holds before using it. Stepping one step a call (the viewer at 1/60 s) searched
         it afresh every call: cloth-drape took 20.5 to 21.2 ms a step that way, now 13.6 to
         13.8, against 9.9 to 11.1 in one call (benchmarks/step_per_call.py)."""
-        if self._solve_pairs is None or self._solve_pairs[0] is not model:
-            self._solve_pairs = (model, kept_surface_pairs(x))
-        return self._solve_pairs[1]
+        kept = self.model_cache(model)
+        if "solve pairs" not in kept:
+            kept["solve pairs"] = kept_surface_pairs(x)
+        return kept["solve pairs"]
 
     def pattern(self, model):
         """What the solve needs of the model (pattern.SolveLayout), built on first use and kept
         for as long as the model (a Simulation keeps one model)."""
-        if self._model is not model:
-            self._model = model
-            self._pattern = build_solve_layout(model.arrays)
-        return self._pattern
+        kept = self.model_cache(model)
+        if "layout" not in kept:
+            kept["layout"] = build_solve_layout(model.arrays)
+        return kept["layout"]
 
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
