@@ -363,5 +363,5 @@ def test_a_flat_default_cloth_lists_no_pair_of_its_own(particles_per_edge):
             near = np.nonzero(gap < reach)[0]
             for t in near:
                 assert p in triangles[t] or neighbours[p] & set(triangles[t]), (p, t)
-    points, edges, _ = start_surface_pairs(arrays, x)
+    points, edges, _, _ = start_surface_pairs(arrays, x)
     assert len(points) == 0 and len(edges) == 0

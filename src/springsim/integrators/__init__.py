@@ -10,8 +10,10 @@ from ..errors import SceneError
 from ..spring_runs import partition_count
 
 REGISTRY: dict[str, type] = {}
-# no body-body pair list yet: (point-triangle pairs, edge-edge pairs, positions found at)
-NO_PAIRS = (np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), np.empty((0, 3)))
+# no body-body pair list yet: (point-triangle pairs, edge-edge pairs, positions found at,
+# steps kept since; surface_collisions.start_surface_pairs)
+NO_PAIRS = (np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), np.empty((0, 3)),
+            np.zeros(1, np.int64))
 
 
 class Integrator:
