@@ -38,6 +38,17 @@ def keeps(arrays, now, then):
                          surface_skin(arrays), now, then)
 
 
+def assert_kept_only_if_it_holds(arrays, now, then):
+    """The oracle: if moved_rigidly keeps the list found at ``then``, every pair within its
+    rest distance ``now`` is in it (both found by the pair search itself)."""
+    kept = keeps(arrays, now, then)
+    event(f"kept: {kept}")
+    if kept:
+        points, edges = listed(arrays, now, 0.0)
+        kept_points, kept_edges = listed(arrays, then, surface_skin(arrays))
+        assert points <= kept_points and edges <= kept_edges
+
+
 def folded(x, angle_degrees, line_z, bend, gap=0.0):
     """The flat cloth x (in the plane y = 0) bent by a ripple of height ``bend`` and folded up
     about the line y = gap / 2, z = line_z by ``angle_degrees``: a fold of 180 degrees lays the
@@ -73,12 +84,7 @@ def test_a_kept_list_holds_every_pair_within_reach(cloth, first, second, turn, s
     angle, line, bend, gap = second
     now = folded(flat, angle, line, bend, max(gap - closing, 0.0))
     now = now @ Rotation.from_euler("xyz", turn, degrees=True).as_matrix().T + np.array(shift)
-    kept = keeps(arrays, now, then)
-    event(f"kept: {kept}")
-    if kept:
-        points, edges = listed(arrays, now, 0.0)
-        kept_points, kept_edges = listed(arrays, then, surface_skin(arrays))
-        assert points <= kept_points and edges <= kept_edges
+    assert_kept_only_if_it_holds(arrays, now, then)
 
 
 def test_a_fold_closing_past_the_skin_is_not_kept(cloth):
@@ -147,9 +153,4 @@ def test_two_bodies_each_moved_rigidly_are_kept_only_while_far_apart(two_cloths,
     middle = piece.mean(axis=0)
     turned = Rotation.from_euler("xyz", turn, degrees=True).as_matrix()
     now[upper.start:upper.stop] = (piece - middle) @ turned.T + middle + (slide, -drop, 0.0)
-    kept = keeps(arrays, now, then)
-    event(f"kept: {kept}")
-    if kept:
-        points, edges = listed(arrays, now, 0.0)
-        kept_points, kept_edges = listed(arrays, then, surface_skin(arrays))
-        assert points <= kept_points and edges <= kept_edges
+    assert_kept_only_if_it_holds(arrays, now, then)

@@ -76,22 +76,39 @@ def test_a_headless_browser_shows_the_body(take_path, tmp_path):
             except OSError:
                 assert time.monotonic() < deadline, "the server did not start"
                 time.sleep(0.2)
-        screenshot = tmp_path / "browser.png"
-        shot = subprocess.run(
-            [browser, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
-             "--hide-scrollbars", f"--user-data-dir={tmp_path / 'profile'}",
-             f"--screenshot={screenshot}", "--window-size=960,600",
-             "--virtual-time-budget=30000", f"http://127.0.0.1:{port}"],
-            capture_output=True, text=True, timeout=120)
-        assert screenshot.exists(), shot.stderr[-2000:]
+        # chromium's virtual time runs ahead of the scene's messages, which come over a socket
+        # in real time: on a loaded machine a shot can come before the mesh (seen once in a
+        # full suite run, 0.2% orange), so up to three shots, until one shows it
+        for attempt in range(3):
+            picture = browser_shot(browser, port, tmp_path / f"shot{attempt}")
+            if orange_pixels(picture).mean() > 0.01:
+                break
     finally:
         server.terminate()
         server.wait(timeout=30)
-    picture = iio.imread(screenshot)[..., :3].astype(int)
     assert picture.shape == (600, 960, 3)
-    r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
-    orange = (r > 150) & (r - b > 60) & (g > b)          # the cube's lit faces
+    orange = orange_pixels(picture)
     rows, columns = np.nonzero(orange)
     assert orange.mean() > 0.01
     # where the body is: the camera frames the motion, so the cube lies in the middle third
     assert 960 / 3 < columns.mean() < 2 * 960 / 3 and 600 / 6 < rows.mean() < 5 * 600 / 6
+
+
+def browser_shot(browser, port, folder):
+    """A 960 x 600 screenshot of the page, by headless chromium (RGB, int)."""
+    folder.mkdir()
+    screenshot = folder / "browser.png"
+    shot = subprocess.run(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+         "--hide-scrollbars", f"--user-data-dir={folder / 'profile'}",
+         f"--screenshot={screenshot}", "--window-size=960,600",
+         "--virtual-time-budget=30000", f"http://127.0.0.1:{port}"],
+        capture_output=True, text=True, timeout=120)
+    assert screenshot.exists(), shot.stderr[-2000:]
+    return iio.imread(screenshot)[..., :3].astype(int)
+
+
+def orange_pixels(picture):
+    """Where the cube's lit faces are: orange pixels."""
+    r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
+    return (r > 150) & (r - b > 60) & (g > b)
