@@ -63,24 +63,27 @@ def shape_boxes(x, shapes, reach):
 def box_grid(boxes):
     """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
     1 / CELLS_PER_BOX as wide as the largest box (wider where they would be too many):
-    (origin, cell size, dims, cell_start, members, their boxes, the largest box's size); cell
-    (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
-    members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
-    [low, high] only if its cell lies between those of low - the largest size and high
-    (``region_cells``), and each is met once."""
+    (origin, cell size, dims, cell_start, members, their boxes, the largest box size along
+    x, y and z); cell (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the
+    boxes members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
+    [low, high] only if its cell lies between those of low - the largest size and high, along
+    each axis (``region_cells``), and each is met once. Why along each axis: a cloth lying
+    flat has boxes as thin as the search's reach across it, and the region then reaches as
+    few cells below it."""
     count = boxes.shape[0]
     origin, extent = np.zeros(3), np.zeros(3)
-    largest = 0.0
+    largest = np.zeros(3)
     for c in range(3):
         low, high = np.inf, -np.inf
         for b in range(count):
             low, high = min(low, boxes[b, c]), max(high, boxes[b, 3 + c])
-            largest = max(largest, boxes[b, 3 + c] - boxes[b, c])
+            largest[c] = max(largest[c], boxes[b, 3 + c] - boxes[b, c])
         if np.abs(low) < np.inf and np.abs(high) < np.inf:   # else (NaN, inf) one cell
             origin[c], extent[c] = low, high - low
-    if not largest < np.inf:
-        largest = 1.0
-    cell = grid_cell_size(extent, largest / CELLS_PER_BOX, MAX_CELLS_PER_PARTICLE * count + 64)
+        if not largest[c] < np.inf:
+            largest[c] = 1.0
+    cell = grid_cell_size(extent, largest.max() / CELLS_PER_BOX,
+                          MAX_CELLS_PER_PARTICLE * count + 64)
     dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
@@ -109,12 +112,12 @@ def box_grid(boxes):
 @kernel
 def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims, largest):
     """The first and last cell along x, y and z whose boxes (box_grid) may overlap the region
-    [low, high]."""
-    return (cell_coordinate(low0 - largest, origin[0], cell, dims[0]),
+    [low, high] (``largest``: the largest box size along each axis)."""
+    return (cell_coordinate(low0 - largest[0], origin[0], cell, dims[0]),
             cell_coordinate(high0, origin[0], cell, dims[0]),
-            cell_coordinate(low1 - largest, origin[1], cell, dims[1]),
+            cell_coordinate(low1 - largest[1], origin[1], cell, dims[1]),
             cell_coordinate(high1, origin[1], cell, dims[1]),
-            cell_coordinate(low2 - largest, origin[2], cell, dims[2]),
+            cell_coordinate(low2 - largest[2], origin[2], cell, dims[2]),
             cell_coordinate(high2, origin[2], cell, dims[2]))
 
 
