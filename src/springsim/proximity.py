@@ -23,6 +23,7 @@ from ._jit import kernel
 from .broadphase import MAX_CELLS_PER_PARTICLE, cell_coordinate, grid_cell_size
 from .geometry import closest_on_segments, closest_on_triangle
 
+GRID_CELLS = 65536    # cells a search's grid may have whatever the shapes' count (0.5 MB)
 CELLS_PER_BOX = 3.0   # grid cells across the largest box: the searches of a 100 x 100 and a
                       # 25 x 25 cloth took 0.8 and 0.88 of their time with 1 cell at 2, 0.73
                       # and 0.82 at 3 (more are capped by MAX_CELLS_PER_PARTICLE there)
@@ -82,8 +83,10 @@ def box_grid(boxes):
             origin[c], extent[c] = low, high - low
         if not largest[c] < np.inf:
             largest[c] = 1.0
+    # at least GRID_CELLS: a small mesh (cloth-balls's 1,800 edges) had its cells doubled
+    # by the per-box cap once it draped in 3D, and searched 7% slower
     cell = grid_cell_size(extent, largest.max() / CELLS_PER_BOX,
-                          MAX_CELLS_PER_PARTICLE * count + 64)
+                          max(MAX_CELLS_PER_PARTICLE * count, GRID_CELLS))
     dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
