@@ -154,3 +154,34 @@ def test_two_bodies_each_moved_rigidly_are_kept_only_while_far_apart(two_cloths,
     turned = Rotation.from_euler("xyz", turn, degrees=True).as_matrix()
     now[upper.start:upper.stop] = (piece - middle) @ turned.T + middle + (slide, -drop, 0.0)
     assert_kept_only_if_it_holds(arrays, now, then)
+
+
+def test_positions_then_with_nan_are_never_kept(cloth):
+    """A list found where a position was NaN (a search after a diverged step) is not kept,
+    and the check reads no cell outside its grid (NaN has no cell)."""
+    arrays, flat = cloth
+    then = flat.copy()
+    then[arrays.surface_points[400]] = np.nan
+    assert not keeps(arrays, flat, then)
+    assert not keeps(arrays, then, then)
+
+
+def test_a_state_loaded_after_a_diverged_step_steps_on(tmp_path):
+    """The integrator keeps the pair list searched at the diverged step's NaN positions; the
+    state loaded after it (finite) is searched afresh and steps like the saved run did."""
+    from springsim.errors import SimulationDiverged
+
+    def simulation():
+        return Simulation(Scene(bodies=[Cloth(particles_per_edge=30, thickness=0.02)],
+                                terrains=[], dt=1e-3))
+    diverged, reference = simulation(), simulation()
+    diverged.step(2)
+    reference.step(2)
+    diverged.save_state(tmp_path / "state.npz")
+    diverged.state.positions[diverged.model.arrays.surface_points[400]] = np.nan
+    with pytest.raises(SimulationDiverged):
+        diverged.step(1)
+    diverged.load_state(tmp_path / "state.npz")
+    diverged.step(3)
+    reference.step(3)
+    assert np.array_equal(diverged.positions, reference.positions)

@@ -29,8 +29,8 @@ times wider, and it takes the pairs that no finer level holds (d >= L_(k-1) - 2 
 shrink by L_(k-1) - 2 delta - rest; the last level is one cell around everything. Right after
 level 0 that last level is tried with level 1's budget, the smallest: where one motion fits the
 whole surface that well, the levels between need no look. A level costs
-three passes over the surface particles (its cells' sums, and each particle's residual in its 8
-windows) and a fit per window: 0.5 to 1.4 ms on the 100 x 100 cloth, against 11 to 14 ms for
+four passes over the surface particles (its grid's bounds, each particle's cell, its cells'
+sums, and each particle's residual in its 8 windows) and a fit per window: 0.5 to 1.4 ms on the 100 x 100 cloth, against 11 to 14 ms for
 a search. That cloth-hang at 1/60 s searched at 109 of its first 199 steps instead of 193
 (surface_collisions.RIGID_CHECK_STEPS says when the check is tried). Where it still searches,
 the finest windows' residual was above the skin's half after one or two steps: its free edge
@@ -111,24 +111,27 @@ def level_grid(points, then, width):
     """The grid of a level: (lowest corner, cell width, cells along x, y, z); width -1 if the
     positions are not finite."""
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    dims = np.ones(3, np.int64)
     for p in points:
         for c in range(3):
+            if not abs(then[p, c]) < np.inf:   # min and max would pass over a NaN
+                return low, -1.0, dims
             low[c], high[c] = min(low[c], then[p, c]), max(high[c], then[p, c])
-    dims = np.ones(3, np.int64)
-    for c in range(3):
-        if not (np.abs(low[c]) < np.inf and np.abs(high[c]) < np.inf):
-            return low, -1.0, dims
-    while True:
+    while True:   # the count in floats: an integer product could wrap for a huge spread
+        cells = 1.0
         for c in range(3):
-            dims[c] = int((high[c] - low[c]) / width) + 1
-        if dims[0] * dims[1] * dims[2] <= MAX_CELLS:
+            cells *= math.floor((high[c] - low[c]) / width) + 1.0
+        if cells <= MAX_CELLS:
+            for c in range(3):
+                dims[c] = int((high[c] - low[c]) / width) + 1
             return low, width, dims
         width *= 2.0
 
 
 @kernel
 def cell_index(value, origin, width, dim):
-    return min(int((value - origin) / width), dim - 1)
+    """The cell of ``value`` along one axis (level_grid has checked that it is finite)."""
+    return max(min(int((value - origin) / width), dim - 1), 0)
 
 
 @kernel
@@ -265,6 +268,8 @@ def worst_residual(points, now, then, origin, cell_of, dims, rotation, shift):
                     d1 = x1 - shift[w, 1] - r[1, 0] * y0 - r[1, 1] * y1 - r[1, 2] * y2
                     d2 = x2 - shift[w, 2] - r[2, 0] * y0 - r[2, 1] * y1 - r[2, 2] * y2
                     off = d0 * d0 + d1 * d1 + d2 * d2
-                    if not off <= worst:
+                    if not off <= worst:   # NaN too
                         worst = off
+                        if not off < np.inf:
+                            return np.nan   # and kept: a later finite one must not replace it
     return math.sqrt(worst)
