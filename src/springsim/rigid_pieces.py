@@ -28,11 +28,12 @@ Levels: the cells of level 0 are L_0 = FINEST x (2 delta + rest + s) wide, and i
 times wider, and it takes the pairs that no finer level holds (d >= L_(k-1) - 2 delta), which may
 shrink by L_(k-1) - 2 delta - rest; the last level is one cell around everything. Right after
 level 0 that last level is tried with level 1's budget, the smallest: where one motion fits the
-whole surface that well, the levels between need no look. A level costs
-four passes over the surface particles (its grid's bounds, each particle's cell, its cells'
-sums, and each particle's residual in its 8 windows) and a fit per window: 0.5 to 1.4 ms on the 100 x 100 cloth, against 11 to 14 ms for
-a search. That cloth-hang at 1/60 s searched at 109 of its first 199 steps instead of 193
-(surface_collisions.RIGID_CHECK_STEPS says when the check is tried). Where it still searches,
+whole surface that well, the levels between need no look. A level costs four passes over the
+surface particles (its grid's bounds, each particle's cell, its cells' sums, and each
+particle's residual in its 8 windows) and a fit per window: 0.8 to 1.0 ms a check on the
+100 x 100 cloth, against 9 to 12 ms for a search. That cloth-hang at 1/60 s searched at 111
+of its first 199 steps instead of 193 (surface_collisions.RIGID_CHECK_STEPS says when the
+check is tried). Where it still searches,
 the finest windows' residual was above the skin's half after one or two steps: its free edge
 whips at up to 13 m/s and bends as it goes.
 """
@@ -41,6 +42,7 @@ import math
 import numpy as np
 
 from ._jit import kernel
+from .broadphase import cell_coordinate, grid_cell_size
 
 FINEST = 1.5        # the finest cells are this many times wider than the pairs they must take
 LEVEL_RATIO = 3.0   # a level's cells are this many times wider than the finest pairs it takes
@@ -96,7 +98,7 @@ def level_shrinks_at_most(points, now, then, width, allowed):
     cell_of = np.empty((points.shape[0], 3), np.int64)
     for k in range(points.shape[0]):
         for c in range(3):
-            cell_of[k, c] = cell_index(then[points[k], c], origin[c], width, dims[c])
+            cell_of[k, c] = cell_coordinate(then[points[k], c], origin[c], width, dims[c])
     sums = cell_sums(points, now, then, origin, cell_of, dims)
     rotation, shift = window_motions(sums, dims)
     worst = worst_residual(points, now, then, origin, cell_of, dims, rotation, shift)
@@ -117,21 +119,10 @@ def level_grid(points, then, width):
             if not abs(then[p, c]) < np.inf:   # min and max would pass over a NaN
                 return low, -1.0, dims
             low[c], high[c] = min(low[c], then[p, c]), max(high[c], then[p, c])
-    while True:   # the count in floats: an integer product could wrap for a huge spread
-        cells = 1.0
-        for c in range(3):
-            cells *= math.floor((high[c] - low[c]) / width) + 1.0
-        if cells <= MAX_CELLS:
-            for c in range(3):
-                dims[c] = int((high[c] - low[c]) / width) + 1
-            return low, width, dims
-        width *= 2.0
-
-
-@kernel
-def cell_index(value, origin, width, dim):
-    """The cell of ``value`` along one axis (level_grid has checked that it is finite)."""
-    return max(min(int((value - origin) / width), dim - 1), 0)
+    width = grid_cell_size(high - low, width, MAX_CELLS)   # doubled while there are too many
+    for c in range(3):
+        dims[c] = int((high[c] - low[c]) / width) + 1
+    return low, width, dims
 
 
 @kernel

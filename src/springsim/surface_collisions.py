@@ -54,12 +54,13 @@ approach speed first, so restitution reflects only what is left: a 10 kg ball hi
 The surface pairs come from proximity.surface_pairs, searched SKIN thinnest thicknesses beyond
 contact, and are kept until the surface particles have moved apart by half the skin since (a
 Verlet list; moving together does not count: list_holds): a step where nothing touches costs
-two passes over the surface particles. Where they have (a cloth that swings turns by degrees a
-step at large steps), a list at most RIGID_CHECK_STEPS steps old is still kept if the motion
+a pass over the surface particles (two where the displacements' box is too large to
+decide). Where they have moved apart (a cloth that swings turns by degrees a step at large
+steps), a list at most RIGID_CHECK_STEPS steps old is still kept if the motion
 since is rigid piece by piece: within half the skin of a rigid fit in every window of the finest
 grid, and within more in coarser ones, for farther pairs (rigid_pieces.moved_rigidly, which
 does what the spread does with a rotation per window of the surface): the 100 x 100 cloth-hang at
-1/60 s searched at 193 of its first 199 steps, and at 109 with this. An older list is searched
+1/60 s searched at 193 of its first 199 steps, and at 111 with this. An older list is searched
 again instead: where the spread keeps a list for long (cloth-balls, ~200 steps), a search
 costs less than checking every step past that.
 A list found afresh gives the same contacts (the narrow phase decides), so results do not
