@@ -12,6 +12,7 @@ bodies without surfaces): then the contact pass costs nothing.
 import numpy as np
 
 from .bodies.surface_contact import SurfaceContact
+from .unfolded_sheet import no_sheet, unfolded_sheet_arrays
 
 
 def surface_contact_arrays(specs, built, offsets) -> dict:
@@ -34,11 +35,16 @@ def surface_contact_arrays(specs, built, offsets) -> dict:
                         dtype=type(default))
 
     all_edges = (np.concatenate(edges) if edges else np.empty((0, 2), np.int64)).astype(np.int64)
+    neighbourhood = neighbour_arrays(all_edges, len(particle_body))
+    # one self-colliding sheet: the pair search may be spared where it lies unfolded
+    sheet = (unfolded_sheet_arrays(all_triangles, len(particle_body),
+                                   neighbourhood["neighbour_start"], neighbourhood["neighbours"])
+             if sum(touching) == 1 and any(selfish) else no_sheet())
     return {"particle_body": particle_body,
             "surface_points": np.unique(all_triangles).astype(np.int64),
             "surface_triangles": all_triangles.astype(np.int64),
             "surface_edges": all_edges,
-            **neighbour_arrays(all_edges, len(particle_body)),
+            **neighbourhood, **sheet,
             "body_thickness": np.array([s.contact_thickness() if s is not None else 0.0
                                         for s in settings]),
             "body_self_collision": per_body("self_collision", False),

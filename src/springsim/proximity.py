@@ -61,9 +61,10 @@ def shape_boxes(x, shapes, reach):
 
 
 @kernel
-def box_grid(boxes):
+def box_grid(boxes, least_cells):
     """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
-    1 / CELLS_PER_BOX as wide as the largest box (wider where they would be too many):
+    1 / CELLS_PER_BOX as wide as the largest box (wider where they would be more than
+    MAX_CELLS_PER_PARTICLE a box and ``least_cells``):
     (origin, cell size, dims, cell_start, members, their boxes, the largest box size along
     x, y and z); cell (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the
     boxes members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
@@ -86,7 +87,7 @@ def box_grid(boxes):
     # at least GRID_CELLS: a small mesh (cloth-balls's 1,800 edges) had its cells doubled
     # by the per-box cap once it draped in 3D, and searched 7% slower
     cell = grid_cell_size(extent, largest.max() / CELLS_PER_BOX,
-                          max(MAX_CELLS_PER_PARTICLE * count, GRID_CELLS))
+                          max(MAX_CELLS_PER_PARTICLE * count, least_cells))
     dims = np.empty(3, np.int64)
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
@@ -129,7 +130,7 @@ def point_triangle_pairs(model, x, boxes, beyond, self_beyond):
     """The (point, triangle) pairs whose grown triangle box holds the point (module doc)."""
     if model.surface_triangles.shape[0] == 0:
         return np.empty((0, 2), np.int64)
-    grid = box_grid(boxes)
+    grid = box_grid(boxes, GRID_CELLS)
     found = np.empty((model.surface_points.shape[0] + 64, 2), np.int64)
     count = collect_point_pairs(model, x, boxes, beyond, self_beyond, grid, found)
     if count > found.shape[0]:   # a crowded step: now the count is known
@@ -205,7 +206,7 @@ def edge_edge_pairs(model, x, boxes, reach, beyond, self_beyond):
     edges = model.surface_edges
     if edges.shape[0] == 0:
         return np.empty((0, 2), np.int64)
-    grid = box_grid(boxes)
+    grid = box_grid(boxes, GRID_CELLS)
     keys = np.empty(edges.shape[0] + 64, np.int64)
     count = collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys)
     if count > keys.shape[0]:   # a crowded step: now the count is known

@@ -79,6 +79,7 @@ from .broadphase import find_contacts
 from .geometry import closest_on_segments, closest_on_triangle, triangle_normal
 from .proximity import surface_pairs
 from .rigid_pieces import moved_rigidly
+from .unfolded_sheet import lies_unfolded
 
 PASSES = 8          # Jacobi passes of the velocity impulses per step
 CORRECTION = 0.5    # share of an overlap removed per step
@@ -119,8 +120,32 @@ def start_surface_pairs(model, x):
     if model.surface_triangles.shape[0] == 0:
         return no_surface_pairs(model, x)
     skin = surface_skin(model)
+    if sheet_lies_unfolded(model, x, skin):   # the search would find nothing
+        return no_surface_pairs(model, x)[:2] + (x.copy(), np.zeros(1, np.int64))
     points, edges = surface_pairs(model, x, skin, skin)
     return points, edges, x.copy(), np.zeros(1, np.int64)
+
+
+@kernel
+def renewed_surface_pairs(model, x, pairs):
+    """The pair list at x once the spread no longer keeps ``pairs`` (list_holds): none where
+    the sheet lies unfolded (the cheaper proof), ``pairs`` where the motion since was rigid by
+    pieces and the list is at most RIGID_CHECK_STEPS steps old, else a fresh search."""
+    if not sheet_lies_unfolded(model, x, surface_skin(model)) \
+            and pairs[3][0] <= RIGID_CHECK_STEPS \
+            and moved_rigidly(model.surface_points, model.surface_edges, model.body_thickness,
+                              surface_skin(model), x, pairs[2]):
+        return pairs
+    return start_surface_pairs(model, x)
+
+
+@kernel
+def sheet_lies_unfolded(model, x, skin):
+    """Whether one self-colliding sheet is the only surface and has no pair within its
+    thickness plus ``skin`` at x (unfolded_sheet.py; False without such a sheet)."""
+    return lies_unfolded(model.surface_triangles, model.sheet_ring_start, model.sheet_ring_edges,
+                         model.sheet_boundary, model.sheet_near_boundary, model.neighbour_start,
+                         model.neighbours, x, model.body_thickness.max() + skin)
 
 
 @kernel
@@ -138,18 +163,6 @@ def list_holds(points, thickness, x, then):
     if (high0 - low0) ** 2 + (high1 - low1) ** 2 + (high2 - low2) ** 2 <= (2.0 * allowed) ** 2:
         return True
     return spread_about(points, x, then, low0, low1, low2, high0, high1, high2) <= allowed
-
-
-@inline_kernel
-def list_still_holds(points, edges, thickness, x, pairs):
-    """Whether the pair list ``pairs`` still holds every pair within reach at x: list_holds,
-    or, for a list at most RIGID_CHECK_STEPS steps old, a motion since that was rigid piece by
-    piece (module doc, rigid_pieces.moved_rigidly). Counts the step in pairs[3]."""
-    pairs[3][0] += 1
-    if list_holds(points, thickness, x, pairs[2]):
-        return True
-    return pairs[3][0] <= RIGID_CHECK_STEPS \
-        and moved_rigidly(points, edges, thickness, skin_of(thickness), x, pairs[2])
 
 
 @kernel
@@ -198,12 +211,12 @@ def resolve_contacts(model, x, v, start, pairs):
     """Apply every body-body contact of (x, v) in place (module doc): those of the surface pair
     list and those of the balls; ``start`` holds the positions at the start of the step.
     Returns the surface list for the next step: ``pairs``, or a fresh one once it no longer
-    holds (``list_still_holds``). Inlined, with the model passed on only where there is a
+    holds (``list_holds``, ``renewed_surface_pairs``). Inlined, with the model passed on only where there is a
     search or a contact: a step where nothing touches makes no call that takes the model."""
-    if model.surface_triangles.shape[0] > 0 \
-            and not list_still_holds(model.surface_points, model.surface_edges,
-                                     model.body_thickness, x, pairs):
-        pairs = start_surface_pairs(model, x)   # NaN too: a fresh search copes with it
+    if model.surface_triangles.shape[0] > 0:
+        pairs[3][0] += 1   # the steps it has been kept
+        if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+            pairs = renewed_surface_pairs(model, x, pairs)   # NaN too: a search copes with it
     balls = ball_pairs(x, model.radius, model.balls, model.ball_slot)
     if pairs[0].shape[0] + pairs[1].shape[0] + balls.shape[0] > 0:
         respond_to_contacts(model, x, v, start, pairs[0], pairs[1], balls)

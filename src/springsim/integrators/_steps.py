@@ -30,7 +30,7 @@ SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold,
 def drive(step, model, state, scratch, h, steps, pairs):
     """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1, the
     body-body pair list for the next call). ``pairs`` is the list the last call left (or
-    none): kept while it still holds (surface_collisions.list_still_holds) for the positions after
+    none): kept while it still holds (surface_collisions.resolve_contacts) for the positions after
     each step, however they came about."""
     x, v = state[0], state[1]
     pairs = pairs_now(model, x, pairs)
