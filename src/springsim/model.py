@@ -66,7 +66,7 @@ class ModelArrays(NamedTuple):
     # One self-colliding sheet (unfolded_sheet.py; empty otherwise): each particle's ring edges,
     # the boundary edges, the particles near them
     sheet_ring_start: np.ndarray = np.zeros(1, np.int64)      # (P + 1,) into sheet_ring_edges
-    sheet_ring_edges: np.ndarray = np.empty((0, 2), np.int64)  # (R, 2) particle numbers
+    sheet_ring_edges: np.ndarray = np.empty((0, 2), np.int32)  # (R, 2) particle numbers
     sheet_boundary: np.ndarray = np.empty((0, 2), np.int64)   # (G, 2) directed along it
     sheet_near_boundary: np.ndarray = np.empty(0, np.int64)   # (N,) particles
 

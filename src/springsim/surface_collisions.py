@@ -56,13 +56,21 @@ contact, and are kept until the surface particles have moved apart by half the s
 Verlet list; moving together does not count: list_holds): a step where nothing touches costs
 a pass over the surface particles (two where the displacements' box is too large to
 decide). Where they have moved apart (a cloth that swings turns by degrees a step at large
-steps), a list at most RIGID_CHECK_STEPS steps old is still kept if the motion
-since is rigid piece by piece: within half the skin of a rigid fit in every window of the finest
-grid, and within more in coarser ones, for farther pairs (rigid_pieces.moved_rigidly, which
-does what the spread does with a rotation per window of the surface): the 100 x 100 cloth-hang at
-1/60 s searched at 193 of its first 199 steps, and at 111 with this. An older list is searched
-again instead: where the spread keeps a list for long (cloth-balls, ~200 steps), a search
-costs less than checking every step past that.
+steps), renewed_surface_pairs tries, cheapest first:
+- one self-colliding sheet (a cloth alone, or with balls) that lies unfolded has no pair of
+  its own within reach, proven from its projection on its mean normal
+  (unfolded_sheet.lies_unfolded: 0.5 ms on the 100 x 100 cloth against 9 to 12 ms for a
+  search, 40 us on cloth-balls's against 560): the list is then empty, as the search's would be;
+- a list at most RIGID_CHECK_STEPS steps old is still kept if the motion since is rigid piece
+  by piece: within half the skin of a rigid fit in every window of the finest grid, and within
+  more in coarser ones, for farther pairs (rigid_pieces.moved_rigidly, which does what the
+  spread does with a rotation per window of the surface). An older list is searched again
+  instead: where the spread keeps a list for long, a search costs less than checking every
+  step past that;
+- else a search.
+The 100 x 100 cloth-hang at 1/60 s searched at 193 of its first 199 steps with the spread alone,
+at 111 with the rigid check, and at about 20 with the unfolded sheet first (where its free
+corner turns over).
 A list found afresh gives the same contacts (the narrow phase decides), so results do not
 depend on when it was found, with one exception: a point carried through a face by between one
 and two rest distances is caught (the side test), but a kept list only promises the pairs
