@@ -330,14 +330,18 @@ def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
     weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -1.0, 0.0, 0.0
     depth[row] = overlap
     ball, other = ball_slot[a], ball_slot[b]
+    # every key read whichever kind the pair is, and the kind chosen among numbers: reading an
+    # array inside the branch kept its reference counting in the loop (43 ns a contact, not 9)
+    partner = other if other >= 0 else ball
+    mean_restitution = 0.5 * (ball_restitution[ball] + ball_restitution[partner])
+    mean_correction = 0.5 * (correction[ball] + correction[partner])
+    restitution, friction, shared = (particle_restitution[ball], particle_friction[ball],
+                                     correction[ball])
     if other >= 0:   # ball-ball: the means of both balls' keys, no friction
-        params[row, 0] = 0.5 * (ball_restitution[ball] + ball_restitution[other])
-        params[row, 1] = params[row, 2] = 0.0
-        params[row, 3] = 0.5 * (correction[ball] + correction[other])
-    else:
-        params[row, 0] = particle_restitution[ball]
-        params[row, 1] = params[row, 2] = particle_friction[ball]
-        params[row, 3] = correction[ball]
+        restitution, friction, shared = mean_restitution, 0.0, mean_correction
+    params[row, 0] = restitution
+    params[row, 1] = params[row, 2] = friction
+    params[row, 3] = shared
     params[row, 4] = 0.0   # friction on the velocities only, as the reference's balls
     params[row, 5] = BALL_PASSES
     return True
@@ -539,13 +543,17 @@ def correct_overlaps(inv_mass, x, start, contacts, stuck, mobility):
         for c in range(3):
             shift[k, c] = push * normal[k, c]
         if stuck[k] and params[k, 4] > 0.0:
-            slid = np.zeros(3)
+            slid0 = slid1 = slid2 = 0.0
             for i in range(4):
-                for c in range(3):
-                    slid[c] += weights[k, i] * (x[nodes[k, i], c] - start[nodes[k, i], c])
-            along = slid[0] * normal[k, 0] + slid[1] * normal[k, 1] + slid[2] * normal[k, 2]
-            for c in range(3):
-                shift[k, c] -= params[k, 4] * (slid[c] - along * normal[k, c])
+                n = nodes[k, i]
+                slid0 += weights[k, i] * (x[n, 0] - start[n, 0])
+                slid1 += weights[k, i] * (x[n, 1] - start[n, 1])
+                slid2 += weights[k, i] * (x[n, 2] - start[n, 2])
+            along = slid0 * normal[k, 0] + slid1 * normal[k, 1] + slid2 * normal[k, 2]
+            back = params[k, 4]
+            shift[k, 0] -= back * (slid0 - along * normal[k, 0])
+            shift[k, 1] -= back * (slid1 - along * normal[k, 1])
+            shift[k, 2] -= back * (slid2 - along * normal[k, 2])
         for c in range(3):
             shift[k, c] /= mobility[k]
     for k in range(nodes.shape[0]):
