@@ -81,8 +81,20 @@ def directed_keys(triangles, particle_count):
 def boundary_edges(triangles, particle_count):
     """The directed edges whose reverse no triangle has: the sheet's boundary."""
     keys, tails, heads = directed_keys(triangles, particle_count)
-    lonely = ~np.isin(heads * particle_count + tails, keys)
+    lonely = ~sorted_holds(np.sort(keys), heads * particle_count + tails)
     return np.stack([tails[lonely], heads[lonely]], axis=1)
+
+
+def sorted_holds(sorted_keys, keys):
+    """Which of ``keys`` are in ``sorted_keys`` (np.isin hashes, ten times slower here)."""
+    at = np.minimum(np.searchsorted(sorted_keys, keys), len(sorted_keys) - 1)
+    return sorted_keys[at] == keys
+
+
+def distinct_count(keys) -> int:
+    """How many different values ``keys`` holds (a sort: np.unique hashes, slower here)."""
+    ordered = np.sort(keys)
+    return int(len(ordered) > 0) + int(np.count_nonzero(np.diff(ordered)))
 
 
 def is_disk(triangles, particle_count) -> bool:
@@ -91,21 +103,23 @@ def is_disk(triangles, particle_count) -> bool:
     every particle's triangles one fan, and Euler characteristic V - E + F = 1 (a connected
     orientable surface with boundary and characteristic 1 has genus 0 and one boundary)."""
     keys, tails, heads = directed_keys(triangles, particle_count)
-    if len(np.unique(keys)) != len(keys):
+    order = np.argsort(keys, kind="stable")
+    sorted_keys = keys[order]
+    if np.any(np.diff(sorted_keys) == 0):
         return False
-    used = np.unique(triangles)
-    undirected = np.unique(np.minimum(tails, heads) * particle_count + np.maximum(tails, heads))
-    if len(used) - len(undirected) + len(triangles) != 1:
+    used = np.flatnonzero(np.bincount(triangles.ravel(), minlength=particle_count))
+    undirected = distinct_count(np.minimum(tails, heads) * particle_count
+                                + np.maximum(tails, heads))
+    if len(used) - undirected + len(triangles) != 1:
         return False
-    if len(boundary_edges(triangles, particle_count)) == 0:
-        return False
+    if np.all(sorted_holds(sorted_keys, heads * particle_count + tails)):
+        return False   # no boundary: closed
     graph = coo_matrix((np.ones(len(tails)), (tails, heads)),
                        shape=(particle_count, particle_count))
     labels = connected_components(graph, directed=False)[1]
-    if len(np.unique(labels[used])) != 1:
+    if np.any(labels[used] != labels[used[0]]):
         return False
-    order = np.argsort(keys)
-    return one_fan_each(triangles, keys[order], order // 3, particle_count)
+    return one_fan_each(triangles, sorted_keys, order // 3, particle_count)
 
 
 @kernel
