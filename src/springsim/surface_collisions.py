@@ -129,9 +129,8 @@ def start_surface_pairs(model, x):
         return no_surface_pairs(model, x)
     skin = surface_skin(model)
     if sheet_lies_unfolded(model, x, skin):   # the search would find nothing
-        return no_surface_pairs(model, x)[:2] + (x.copy(), np.zeros(1, np.int64))
-    points, edges = surface_pairs(model, x, skin, skin)
-    return points, edges, x.copy(), np.zeros(1, np.int64)
+        return no_pairs_at(x)
+    return searched_surface_pairs(model, x, skin)
 
 
 @kernel
@@ -139,12 +138,28 @@ def renewed_surface_pairs(model, x, pairs):
     """The pair list at x once the spread no longer keeps ``pairs`` (list_holds): none where
     the sheet lies unfolded (the cheaper proof), ``pairs`` where the motion since was rigid by
     pieces and the list is at most RIGID_CHECK_STEPS steps old, else a fresh search."""
-    if not sheet_lies_unfolded(model, x, surface_skin(model)) \
-            and pairs[3][0] <= RIGID_CHECK_STEPS \
+    skin = surface_skin(model)
+    if sheet_lies_unfolded(model, x, skin):
+        return no_pairs_at(x)
+    if pairs[3][0] <= RIGID_CHECK_STEPS \
             and moved_rigidly(model.surface_points, model.surface_edges, model.body_thickness,
-                              surface_skin(model), x, pairs[2]):
+                              skin, x, pairs[2]):
         return pairs
-    return start_surface_pairs(model, x)
+    return searched_surface_pairs(model, x, skin)
+
+
+@kernel
+def no_pairs_at(x):
+    """An empty pair list found at x."""
+    return (np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), x.copy(),
+            np.zeros(1, np.int64))
+
+
+@kernel
+def searched_surface_pairs(model, x, skin):
+    """The pair list of a search at x, ``skin`` beyond contact."""
+    points, edges = surface_pairs(model, x, skin, skin)
+    return points, edges, x.copy(), np.zeros(1, np.int64)
 
 
 @kernel
