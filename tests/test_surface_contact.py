@@ -338,6 +338,7 @@ def test_a_flat_default_cloth_lists_no_pair_of_its_own(particles_per_edge):
     triangle it does not share an edge with, measured with plain NumPy over every (point,
     triangle) pair; and the pair search lists none, so a cloth where nothing touches costs no
     narrow phase. The thickness is below half the spacing, as self-collision requires."""
+    from springsim.proximity import surface_pairs
     from springsim.surface_collisions import start_surface_pairs, surface_skin
     cloth = Cloth(particles_per_edge=particles_per_edge)
     simulation = Simulation(Scene(bodies=[cloth], terrains=[], dt=1e-3))
@@ -363,5 +364,7 @@ def test_a_flat_default_cloth_lists_no_pair_of_its_own(particles_per_edge):
             near = np.nonzero(gap < reach)[0]
             for t in near:
                 assert p in triangles[t] or neighbours[p] & set(triangles[t]), (p, t)
-    points, edges, _, _ = start_surface_pairs(arrays, x)
+    skin = surface_skin(arrays)
+    points, edges = surface_pairs(arrays, x, skin, skin)   # the search itself, not the proof
     assert len(points) == 0 and len(edges) == 0
+    assert len(start_surface_pairs(arrays, x)[0]) == 0   # nor what the contact pass starts with
