@@ -89,10 +89,16 @@ def clamp01(value):
 def triangle_normal(x, i, j, k):
     """The unit normal (x_j - x_i) x (x_k - x_i) / |...| of a triangle of rows of x, or zeros
     for a degenerate one."""
-    ux, uy, uz = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
-    wx, wy, wz = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
-    nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    nx, ny, nz = area_vector(x, i, j, k)
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     if not length > 0.0:
         return 0.0, 0.0, 0.0
     return nx / length, ny / length, nz / length
+
+
+@kernel
+def area_vector(x, i, j, k):
+    """(x_j - x_i) x (x_k - x_i): twice the triangle's area along its normal."""
+    ux, uy, uz = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
+    wx, wy, wz = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
+    return uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx

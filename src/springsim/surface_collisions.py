@@ -233,9 +233,10 @@ def spread_about(points, now, then, low0, low1, low2, high0, high1, high2):
 def resolve_contacts(model, x, v, start, pairs):
     """Apply every body-body contact of (x, v) in place (module doc): those of the surface pair
     list and those of the balls; ``start`` holds the positions at the start of the step.
-    Returns the surface list for the next step: ``pairs``, or a fresh one once it no longer
-    holds (``list_holds``, ``renewed_surface_pairs``). Inlined, with the model passed on only where there is a
-    search or a contact: a step where nothing touches makes no call that takes the model."""
+    Returns the surface list for the next step: ``pairs``, or a renewed one once it no longer
+    holds (``list_holds``, ``renewed_surface_pairs``). Inlined, with the model passed on only
+    where there is a search or a contact: a step where nothing touches makes no call that takes
+    the model."""
     if model.surface_triangles.shape[0] > 0:
         pairs[3][0] += 1   # the steps it has been kept
         if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):

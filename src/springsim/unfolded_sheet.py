@@ -39,7 +39,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ._jit import kernel
-from .proximity import box_grid, region_cells
+from .geometry import area_vector, triangle_normal
+from .proximity import box_grid, joined, region_cells
 
 FACING = 1e-9     # a triangle faces the axis if its normal's cosine to it is above this
 AXIS_TURNS = 8    # turns of the axis at most, where the mean normal does not do
@@ -244,13 +245,8 @@ def listed(r, s, out, count):
 
 @kernel
 def in_closed_neighbourhood(p, q, neighbour_start, neighbours):
-    """Whether q is p or one of its neighbours (ascending)."""
-    if p == q:
-        return True
-    for k in range(neighbour_start[p], neighbour_start[p + 1]):
-        if neighbours[k] >= q:
-            return neighbours[k] == q
-    return False
+    """Whether q is p or one of its neighbours (proximity.joined)."""
+    return p == q or joined(neighbour_start, neighbours, p, q)
 
 
 @kernel
@@ -297,8 +293,7 @@ def least_facing(triangles, x, a0, a1, a2):
     p0 = p1 = p2 = 0.0
     count = 0
     for t in range(triangles.shape[0]):
-        v0, v1, v2 = area_vector(triangles, x, t)
-        n0, n1, n2 = unit(v0, v1, v2)
+        n0, n1, n2 = triangle_normal(x, triangles[t, 0], triangles[t, 1], triangles[t, 2])
         cosine = n0 * a0 + n1 * a1 + n2 * a2
         worst = min(worst, cosine)
         if cosine < TURN_BELOW:
@@ -322,25 +317,16 @@ def mean_normal(triangles, x):
     """The unit sum of the triangles' area vectors (NaN where it is zero)."""
     a0 = a1 = a2 = 0.0
     for t in range(triangles.shape[0]):
-        n0, n1, n2 = area_vector(triangles, x, t)
+        n0, n1, n2 = area_vector(x, triangles[t, 0], triangles[t, 1], triangles[t, 2])
         a0, a1, a2 = a0 + n0, a1 + n1, a2 + n2
     return unit(a0, a1, a2)
-
-
-@kernel
-def area_vector(triangles, x, t):
-    """(b - a) x (c - a) of triangle t = (a, b, c): twice its area along its normal."""
-    a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-    u0, u1, u2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
-    w0, w1, w2 = x[c, 0] - x[a, 0], x[c, 1] - x[a, 1], x[c, 2] - x[a, 2]
-    return u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0
 
 
 @kernel
 def all_facing(triangles, x, a0, a1, a2):
     """Whether every triangle's normal has a cosine above FACING with the unit axis a."""
     for t in range(triangles.shape[0]):
-        n0, n1, n2 = area_vector(triangles, x, t)
+        n0, n1, n2 = area_vector(x, triangles[t, 0], triangles[t, 1], triangles[t, 2])
         along = n0 * a0 + n1 * a1 + n2 * a2
         if not (along > 0.0 and along * along > FACING * FACING * (n0 * n0 + n1 * n1 + n2 * n2)):
             return False
