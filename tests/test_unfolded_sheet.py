@@ -41,8 +41,9 @@ def unfolded(arrays, x):
     return sheet_lies_unfolded(arrays, x, surface_skin(arrays))
 
 
-def pair_count(arrays, x):
-    skin = surface_skin(arrays)
+def pair_count(arrays, x, skin=None):
+    """The search's pairs within the thickness plus ``skin`` (the contact pass's, by default)."""
+    skin = surface_skin(arrays) if skin is None else skin
     points, edges = surface_pairs(arrays, x, skin, skin)
     return len(points) + len(edges)
 
@@ -82,13 +83,17 @@ SLOW_OK = [HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
 @example(ripple=0.35, fold=0.0, roll=0.0, twist=0.0, turn=(10.0, 0.0, 0.0), jitter=0.0, seed=0)
 def test_an_unfolded_sheet_has_no_pair_within_reach(cloth, ripple, fold, roll, twist, turn,
                                                     jitter, seed):
-    """The oracle: wherever the proof passes, the search finds nothing within reach."""
+    """The oracle: wherever the proof passes, the search finds nothing within reach; the same
+    within the bare thickness (the proof a step's contacts alone need)."""
     arrays, flat = cloth
     x = shaped(flat, ripple, fold, roll, twist, turn, jitter, seed)
     passed = unfolded(arrays, x)
-    event(f"passed: {passed}")
+    passed_bare = sheet_lies_unfolded(arrays, x, 0.0)
+    event(f"passed: {passed}, within the thickness: {passed_bare}")
     if passed:
         assert pair_count(arrays, x) == 0
+    if passed_bare:
+        assert pair_count(arrays, x, skin=0.0) == 0
 
 
 def test_a_sheet_rolled_until_its_ends_nearly_meet_has_pairs_and_fails(cloth):
@@ -128,6 +133,38 @@ def test_a_sheet_pinched_in_its_middle_has_pairs_and_fails(cloth):
     x[:, [0, 2]] *= (1.0 - 0.75 * np.exp(-(r / 0.3) ** 2))[:, None]
     assert pair_count(arrays, x) > 0
     assert not unfolded(arrays, x)
+
+
+def test_a_list_proven_within_the_thickness_alone_serves_its_step_and_is_never_kept(cloth):
+    """Pinched until pairs lie between the thickness and the thickness plus the skin (no pair
+    within the thickness), the cloth fails the proof within the skin and passes it within the
+    thickness: the renewed list is then empty, as the search within the thickness is, and
+    holds for that step alone. Pinched further, with pairs within the thickness now, the next
+    step does not keep it (neither by the spread nor by the rigid check, though the motion is
+    small) and renews it with exactly the search's pairs."""
+    from springsim.surface_collisions import (list_holds, renewed_surface_pairs,
+                                              start_surface_pairs)
+    arrays, flat = cloth
+
+    def pinched(depth):
+        x = flat - flat.mean(axis=0)
+        r = np.hypot(x[:, 0], x[:, 2])
+        x[:, [0, 2]] *= (1.0 - depth * np.exp(-(r / 0.3) ** 2))[:, None]
+        return x
+
+    before, now = pinched(0.92), pinched(0.94)
+    assert pair_count(arrays, before) > 0 and pair_count(arrays, before, skin=0.0) == 0
+    assert pair_count(arrays, now, skin=0.0) > 0
+    # so little motion that a list found by a search at ``before`` would be kept
+    assert list_holds(arrays.surface_points, arrays.body_thickness, now, before)
+    old = start_surface_pairs(arrays, flat)
+    listed = renewed_surface_pairs(arrays, before, old)
+    assert len(listed[0]) == 0 and len(listed[1]) == 0
+    assert not list_holds(arrays.surface_points, arrays.body_thickness, now, listed[2])
+    renewed = renewed_surface_pairs(arrays, now, listed)
+    skin = surface_skin(arrays)
+    for got, searched in zip(renewed[:2], surface_pairs(arrays, now, skin, skin)):
+        assert np.array_equal(got, searched)
 
 
 def test_boundary_edges_meet_where_they_cross_touch_or_fold_back():
