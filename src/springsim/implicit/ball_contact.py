@@ -23,9 +23,10 @@ through the cloth at every step from 1/60 to 1/20 s (68 of 81 drops of
 benchmarks/ball_through_cloth.py, 0 with triangles). A point is a triangle with weights (1, 0, 0).
 
 Surface contacts (point-triangle and edge-edge pairs of two bodies, or of one self-colliding
-body: surface_collisions.py) go into the same contact set, found by
-surface_contact.find_surface_pairs, for the same reason: a cube dropped onto another at 1/30 s
-sank through it with the post-step pass alone.
+body: surface_collisions.py) go into the same contact set for the same reason: a cube dropped
+onto another at 1/30 s sank through it with the post-step pass alone. Pairs of two bodies are
+found by surface_contact.find_surface_pairs; a body's own pairs are those of the post-step
+pass's list at the step's start (surface_contact.py says why).
 
 Every contact is a stencil of four particles with signed weights c_i that sum to zero, and
 d = sum_i c_i x_i runs from one side of the contact to the other:
@@ -118,13 +119,20 @@ no_ball_contacts = no_contacts   # the name the solve's tests know it by
 
 
 @kernel
-def find_solve_contacts(model, x, v, h, kept):
+def find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges):
     """The contact set of a step: every ball-point and ball-sheet-triangle pair
-    (``find_ball_pairs``) and every surface point-triangle and edge-edge pair
+    (``find_ball_pairs``), every surface point-triangle and edge-edge pair of two bodies
     (surface_contact.find_surface_pairs, ``kept`` its list) the step can bring into contact,
-    all inactive until ``linearize_contacts``."""
+    and the pairs of one body among the post-step pass's pairs at x (``listed_points``,
+    ``listed_edges``: surface_contact.py says why these), all inactive until
+    ``linearize_contacts``."""
     points, faces = find_ball_pairs(model, x, v, h)
     point_pairs, edge_pairs = find_surface_pairs(model, x, v, h, kept)
+    body, triangles, edges = model.particle_body, model.surface_triangles, model.surface_edges
+    own_points = own_pairs(body, listed_points, listed_points[:, 0], triangles[:, 0])
+    own_edges = own_pairs(body, listed_edges, edges[listed_edges[:, 0], 0], edges[:, 0])
+    point_pairs = np.concatenate((point_pairs, own_points))
+    edge_pairs = np.concatenate((edge_pairs, own_edges))
     contacts = empty_contacts(points.shape[0] + faces.shape[0] + point_pairs.shape[0]
                               + edge_pairs.shape[0])
     nodes, weights, shape, rest = contacts[0], contacts[1], contacts[6], contacts[7]
@@ -159,6 +167,16 @@ def find_solve_contacts(model, x, v, h, kept):
         rest[p] = 0.5 * (thickness[body[edges[e, 0]]] + thickness[body[edges[f, 0]]])
         p += 1
     return contacts
+
+
+@kernel
+def own_pairs(body, pairs, first_particles, second_shape_particles):
+    """The rows of ``pairs`` whose two sides lie on one body: the first side's particle is
+    first_particles[k], the second's second_shape_particles[pairs[k, 1]]."""
+    same = np.zeros(pairs.shape[0], np.bool_)
+    for k in range(pairs.shape[0]):
+        same[k] = body[first_particles[k]] == body[second_shape_particles[pairs[k, 1]]]
+    return pairs[same]
 
 
 @kernel

@@ -1,8 +1,11 @@
 """What every integrator shares: the one driver loop, and the small kernels of a step.
 
-Each method is a step function ``step(model, state, scratch, h)`` that advances ``state`` (a tuple
-whose first two entries are the positions x and velocities v, changed in place) by one step h,
-using the work arrays in ``scratch``. ``drive`` takes whole steps with it: step, then everything
+Each method is a step function ``step(model, state, scratch, h, pairs)`` that advances ``state``
+(a tuple whose first two entries are the positions x and velocities v, changed in place) by one
+step h, using the work arrays in ``scratch``; ``pairs`` is the body-body pair list at the step's
+start (every surface pair within contact there: surface_collisions.py), which the explicit
+methods leave to the pass after the step and backward Euler's solve also takes a body's own
+pairs from (implicit/ball_contact.py). ``drive`` takes whole steps with it: step, then everything
 that follows every integrator's update (``finish_step``: impacts, body-body contact, the divergence
 check). Each integrator file binds its step in a two-line cached kernel,
 ``advance = drive(its_step, model, state, its_scratch(x), h, steps, pairs)``, where ``pairs`` is
@@ -37,7 +40,7 @@ def drive(step, model, state, scratch, h, steps, pairs):
     start = step_start(model, x)
     for done in range(steps):
         copy_positions(start, x)
-        step(model, state, scratch, h)
+        step(model, state, scratch, h, pairs)
         particle, pairs = finish_step(model, x, v, start, pairs)
         if particle >= 0:
             return done + 1, particle, pairs

@@ -6,7 +6,7 @@ from ._steps import add_scaled, drive, one_stage_scratch
 
 
 @inline_kernel
-def explicit_euler_step(model, state, scratch, h):
+def explicit_euler_step(model, state, scratch, h, pairs):
     x, v = state
     a, columns = scratch
     accelerations(model, x, v, h, a, columns)

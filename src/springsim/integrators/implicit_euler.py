@@ -96,8 +96,10 @@ def solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x, v, dv, 
 @kernel
 def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
                         work, kind, terrain, normal_floor, friction_damping, last_change,
-                        statistics):
+                        statistics, listed_points, listed_edges):
     """One step; adds its conjugate-gradient iterations and linear solves to statistics.
+    ``listed_points`` and ``listed_edges``: the post-step pass's surface pairs at x, whose pairs
+    of one body the solve takes as contacts (implicit/ball_contact.find_solve_contacts).
 
     The first solve starts along the last step's velocity change (last_change, kept in the
     state; cg.mass_start says why). The solution is the same to the CG tolerance. Later Newton
@@ -105,7 +107,7 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
     blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms, kept = work
     pattern = layout.diagonal
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
-    contacts = find_solve_contacts(model, x, v, h, kept)
+    contacts = find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
@@ -156,15 +158,15 @@ def workspace(layout, x, kept):
 
 
 @kernel
-def implicit_euler_step(model, state, scratch, h):
+def implicit_euler_step(model, state, scratch, h, pairs):
     """backward_euler_step as the driver calls it: the state carries the contacts
     (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
-    statistics."""
+    statistics; ``pairs`` is the post-step pass's list at the step's start."""
     x, v, kind, terrain, normal_floor, friction_damping, last_change = state
     layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
     backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
                         work, kind, terrain, normal_floor, friction_damping, last_change,
-                        statistics)
+                        statistics, pairs[0], pairs[1])
 
 
 @kernel

@@ -10,7 +10,7 @@ from ._steps import add_scaled, drive, two_stage_scratch
 
 
 @inline_kernel
-def midpoint_step(model, state, scratch, h):
+def midpoint_step(model, state, scratch, h, pairs):
     x, v = state
     a, x_mid, v_mid, columns = scratch
     accelerations(model, x, v, h, a, columns)

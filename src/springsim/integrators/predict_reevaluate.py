@@ -23,7 +23,7 @@ from ._steps import add_scaled, drive, two_stage_scratch
 
 
 @inline_kernel
-def predict_reevaluate_step(model, state, scratch, h):
+def predict_reevaluate_step(model, state, scratch, h, pairs):
     x, v = state
     a, x_p, v_p, columns = scratch
     accelerations(model, x, v, h, a, columns)

@@ -16,7 +16,7 @@ from ._steps import drive
 
 
 @inline_kernel
-def rk4_step(model, state, scratch, h):
+def rk4_step(model, state, scratch, h, pairs):
     x, v = state
     x_k, v_k, a, dx, dv, columns = scratch
     accelerations(model, x, v, h, a, columns)      # k1 = (v, a)
