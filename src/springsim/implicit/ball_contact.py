@@ -86,6 +86,7 @@ import numpy as np
 from .._jit import inline_kernel, kernel
 from ..broadphase import find_contacts
 from ..geometry import closest_on_segments, closest_on_triangle, triangle_normal
+from ..proximity import edge_distance, point_triangle_distance
 from .surface_contact import find_surface_pairs
 
 STIFFNESS = 100.0    # h^2 k / m_eff: a pair alone keeps 1/101 of its predicted penetration
@@ -128,9 +129,8 @@ def find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges):
     ``linearize_contacts``."""
     points, faces = find_ball_pairs(model, x, v, h)
     point_pairs, edge_pairs = find_surface_pairs(model, x, v, h, kept)
-    body, triangles, edges = model.particle_body, model.surface_triangles, model.surface_edges
-    own_points = own_pairs(body, listed_points, listed_points[:, 0], triangles[:, 0])
-    own_edges = own_pairs(body, listed_edges, edges[listed_edges[:, 0], 0], edges[:, 0])
+    own_points = own_touching(model, x, listed_points, True)
+    own_edges = own_touching(model, x, listed_edges, False)
     point_pairs = np.concatenate((point_pairs, own_points))
     edge_pairs = np.concatenate((edge_pairs, own_edges))
     contacts = empty_contacts(points.shape[0] + faces.shape[0] + point_pairs.shape[0]
@@ -170,13 +170,26 @@ def find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges):
 
 
 @kernel
-def own_pairs(body, pairs, first_particles, second_shape_particles):
-    """The rows of ``pairs`` whose two sides lie on one body: the first side's particle is
-    first_particles[k], the second's second_shape_particles[pairs[k, 1]]."""
-    same = np.zeros(pairs.shape[0], np.bool_)
+def own_touching(model, x, pairs, point_triangle):
+    """The rows of ``pairs`` (point-triangle if ``point_triangle``, else edge-edge) of one body
+    that are closer than its thickness at x. Only those: every list the post-step pass keeps
+    holds them, whenever and however it was found, so the solve's contacts do not depend on
+    the list's history (a run resumed from a saved state steps as the one that went on); the
+    farther pairs a list may also hold did (6 mm after one step of a folded cloth pressed by
+    a cube, a copy of the state against the run)."""
+    body, thickness = model.particle_body, model.body_thickness
+    triangles, edges = model.surface_triangles, model.surface_edges
+    corners = np.empty((3, 3))
+    keep = np.zeros(pairs.shape[0], np.bool_)
     for k in range(pairs.shape[0]):
-        same[k] = body[first_particles[k]] == body[second_shape_particles[pairs[k, 1]]]
-    return pairs[same]
+        if point_triangle:
+            p, first = pairs[k, 0], triangles[pairs[k, 1], 0]
+            gap = point_triangle_distance(x, triangles, pairs[k, 0], pairs[k, 1], corners)
+        else:
+            p, first = edges[pairs[k, 0], 0], edges[pairs[k, 1], 0]
+            gap = edge_distance(x, edges, pairs[k, 0], pairs[k, 1])
+        keep[k] = body[p] == body[first] and gap < thickness[body[p]]
+    return pairs[keep]
 
 
 @kernel

@@ -20,8 +20,8 @@ A body's own pairs (a cloth's folds) are not searched here: searched with the st
 few thicknesses of hundreds of its own triangles), and a cloth hit by a 20 m/s ball at 1/30 s
 (0.7 m a step) had hundreds of its own pairs, passing by rather than through each other, taken
 for crossings, which threw the ball 13 m up. The solve takes instead the own pairs of the
-post-step pass's list at the step's start (ball_contact.find_solve_contacts): the pairs
-within contact there, as a fold lies, found at no cost of the solve's (the 100 x 100
+post-step pass's list at the step's start that are in contact there
+(ball_contact.own_touching), as a fold lies, found at no cost of the solve's (the 100 x 100
 cloth-hang's list is empty wherever the sheet is proven unfolded). So a cube pressing one layer
 of a folded cloth onto the other at 1/60 s no longer pushes it through (8 crossings before;
 tests/test_implicit_surface_contact.py), and pairs that approach from farther within one step
