@@ -24,7 +24,7 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import resolve_contacts, start_surface_pairs
+from ..surface_collisions import list_holds, resolve_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -49,11 +49,16 @@ def drive(step, model, state, scratch, h, steps, pairs):
 
 @kernel
 def pairs_now(model, x, pairs):
-    """``pairs``, or a fresh search where there is none yet (or it was found for another
-    number of particles). Whether it still holds is checked before each use, after the step
-    (surface_collisions.resolve_contacts), as within one call: so stepping one step a call
-    searches at the same steps as one call of many."""
-    if model.surface_triangles.shape[0] == 0 or pairs[2].shape[0] == x.shape[0]:
+    """``pairs`` where it still holds at x (surface_collisions.list_holds), else the list
+    found afresh for x. Why check here too: between calls the state may have been replaced
+    (``Simulation.state = ...``, ``load_state``, edited positions), and backward Euler's solve
+    takes a body's own pairs from this list before the post-step pass would notice. A list for
+    one step alone (no_pairs_this_step) never holds, so a call that starts on one proves it
+    again: the same list, at the cost of a proof."""
+    if model.surface_triangles.shape[0] == 0:
+        return pairs
+    if pairs[2].shape[0] == x.shape[0] \
+            and list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
         return pairs
     return start_surface_pairs(model, x)
 
