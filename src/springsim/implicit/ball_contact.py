@@ -25,8 +25,8 @@ benchmarks/ball_through_cloth.py, 0 with triangles). A point is a triangle with 
 Surface contacts (point-triangle and edge-edge pairs of two bodies, or of one self-colliding
 body: surface_collisions.py) go into the same contact set for the same reason: a cube dropped
 onto another at 1/30 s sank through it with the post-step pass alone. Pairs of two bodies are
-found by surface_contact.find_surface_pairs; a body's own pairs are those of the post-step
-pass's list at the step's start (surface_contact.py says why).
+found by surface_contact.find_surface_pairs; a body's own pairs come from the post-step
+pass's list (own_contact.py says which and why).
 
 Every contact is a stencil of four particles with signed weights c_i that sum to zero, and
 d = sum_i c_i x_i runs from one side of the contact to the other:
@@ -86,7 +86,6 @@ import numpy as np
 from .._jit import inline_kernel, kernel
 from ..broadphase import find_contacts
 from ..geometry import closest_on_segments, closest_on_triangle, triangle_normal
-from ..proximity import edge_distance, point_triangle_distance
 from .surface_contact import find_surface_pairs
 
 STIFFNESS = 100.0    # h^2 k / m_eff: a pair alone keeps 1/101 of its predicted penetration
@@ -120,17 +119,14 @@ no_ball_contacts = no_contacts   # the name the solve's tests know it by
 
 
 @kernel
-def find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges):
+def find_solve_contacts(model, x, v, h, kept, own_points, own_edges):
     """The contact set of a step: every ball-point and ball-sheet-triangle pair
     (``find_ball_pairs``), every surface point-triangle and edge-edge pair of two bodies
     (surface_contact.find_surface_pairs, ``kept`` its list) the step can bring into contact,
-    and the pairs of one body among the post-step pass's pairs at x (``listed_points``,
-    ``listed_edges``: surface_contact.py says why these), all inactive until
-    ``linearize_contacts``."""
+    and the pairs of one body ``own_points``, ``own_edges`` (own_contact.py), all inactive
+    until ``linearize_contacts``."""
     points, faces = find_ball_pairs(model, x, v, h)
     point_pairs, edge_pairs = find_surface_pairs(model, x, v, h, kept)
-    own_points = own_touching(model, x, listed_points, True)
-    own_edges = own_touching(model, x, listed_edges, False)
     point_pairs = np.concatenate((point_pairs, own_points))
     edge_pairs = np.concatenate((edge_pairs, own_edges))
     contacts = empty_contacts(points.shape[0] + faces.shape[0] + point_pairs.shape[0]
@@ -167,29 +163,6 @@ def find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges):
         rest[p] = 0.5 * (thickness[body[edges[e, 0]]] + thickness[body[edges[f, 0]]])
         p += 1
     return contacts
-
-
-@kernel
-def own_touching(model, x, pairs, point_triangle):
-    """The rows of ``pairs`` (point-triangle if ``point_triangle``, else edge-edge) of one body
-    that are closer than its thickness at x. Only those: every list the post-step pass keeps
-    holds them, whenever and however it was found, so the solve's contacts do not depend on
-    the list's history (a run resumed from a saved state steps as the one that went on); the
-    farther pairs a list may also hold did (6 mm after one step of a folded cloth pressed by
-    a cube, a copy of the state against the run)."""
-    body, thickness = model.particle_body, model.body_thickness
-    triangles, edges = model.surface_triangles, model.surface_edges
-    corners = np.empty((3, 3))
-    keep = np.zeros(pairs.shape[0], np.bool_)
-    for k in range(pairs.shape[0]):
-        if point_triangle:
-            p, first = pairs[k, 0], triangles[pairs[k, 1], 0]
-            gap = point_triangle_distance(x, triangles, pairs[k, 0], pairs[k, 1], corners)
-        else:
-            p, first = edges[pairs[k, 0], 0], edges[pairs[k, 1], 0]
-            gap = edge_distance(x, edges, pairs[k, 0], pairs[k, 1])
-        keep[k] = body[p] == body[first] and gap < thickness[body[p]]
-    return pairs[keep]
 
 
 @kernel

@@ -15,17 +15,9 @@ positions x + h v with reach = each pair's rest distance + that bound + REACH_SL
 largest thickness, for what the solve's velocity change adds. A model without surface contact
 returns at once.
 
-A body's own pairs (a cloth's folds) are not searched here: searched with the step's reach, a
-100 x 100 cloth hanging at 1/60 s ran at 1.5 steps/s instead of 67 (every particle within a
-few thicknesses of hundreds of its own triangles), and a cloth hit by a 20 m/s ball at 1/30 s
-(0.7 m a step) had hundreds of its own pairs, passing by rather than through each other, taken
-for crossings, which threw the ball 13 m up. The solve takes instead the own pairs of the
-post-step pass's list at the step's start that are in contact there
-(ball_contact.own_touching), as a fold lies, found at no cost of the solve's (the 100 x 100
-cloth-hang's list is empty wherever the sheet is proven unfolded). So a cube pressing one layer
-of a folded cloth onto the other at 1/60 s no longer pushes it through (8 crossings before;
-tests/test_implicit_surface_contact.py), and pairs that approach from farther within one step
-are the post-step pass's, as before.
+A body's own pairs (a cloth's folds) are not searched here, but taken from the post-step pass's
+list, those in contact at the step's start and at the end of each solve: own_contact.py says
+why.
 
 The search (proximity.py, 0.64 ms a step on cloth-balls's self-colliding 25 x 25 cloth, ten times
 the ball search) is not run every step: it reaches SKIN thicknesses farther, and its list is kept

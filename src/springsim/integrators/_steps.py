@@ -5,7 +5,8 @@ Each method is a step function ``step(model, state, scratch, h, pairs)`` that ad
 step h, using the work arrays in ``scratch``; ``pairs`` is the body-body pair list at the step's
 start (every surface pair within contact there: surface_collisions.py), which the explicit
 methods leave to the pass after the step and backward Euler's solve also takes a body's own
-pairs from (implicit/ball_contact.py). ``drive`` takes whole steps with it: step, then everything
+pairs from (implicit/own_contact.py). It returns the list for that pass: ``pairs``, or one
+renewed within the step (backward Euler's, at its Newton estimate). ``drive`` takes whole steps with it: step, then everything
 that follows every integrator's update (``finish_step``: impacts, body-body contact, the divergence
 check). Each integrator file binds its step in a two-line cached kernel,
 ``advance = drive(its_step, model, state, its_scratch(x), h, steps, pairs)``, where ``pairs`` is
@@ -24,7 +25,8 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import list_holds, resolve_contacts, start_surface_pairs
+from ..surface_collisions import (list_holds, renewed_surface_pairs, resolve_contacts,
+                                  start_surface_pairs)
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -40,7 +42,7 @@ def drive(step, model, state, scratch, h, steps, pairs):
     start = step_start(model, x)
     for done in range(steps):
         copy_positions(start, x)
-        step(model, state, scratch, h, pairs)
+        pairs = step(model, state, scratch, h, pairs)
         particle, pairs = finish_step(model, x, v, start, pairs)
         if particle >= 0:
             return done + 1, particle, pairs
@@ -49,18 +51,22 @@ def drive(step, model, state, scratch, h, steps, pairs):
 
 @kernel
 def pairs_now(model, x, pairs):
-    """``pairs`` where it still holds at x (surface_collisions.list_holds), else the list
-    found afresh for x. Why check here too: between calls the state may have been replaced
-    (``Simulation.state = ...``, ``load_state``, edited positions), and backward Euler's solve
-    takes a body's own pairs from this list before the post-step pass would notice. A list for
-    one step alone (no_pairs_this_step) never holds, so a call that starts on one proves it
-    again: the same list, at the cost of a proof."""
+    """``pairs`` where it still holds at x, else renewed there, as the pass after each step
+    does (surface_collisions.resolve_contacts); a fresh list where there is none yet (or it
+    was found for another number of particles). Why check here too: between calls the state
+    may have been replaced (``Simulation.state = ...``, ``load_state``, edited positions), and
+    backward Euler's solve takes a body's own pairs from this list before the post-step pass
+    would notice. Renewed, not searched afresh: a list that the last step kept (the spread no
+    longer holds, the motion was rigid by pieces) is kept again, so stepping one step a call
+    gives what one call of many gives (a list for one step alone, no_pairs_this_step, is
+    proven again: the same list, at the cost of a proof)."""
     if model.surface_triangles.shape[0] == 0:
         return pairs
-    if pairs[2].shape[0] == x.shape[0] \
-            and list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+    if pairs[2].shape[0] != x.shape[0]:
+        return start_surface_pairs(model, x)
+    if list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
         return pairs
-    return start_surface_pairs(model, x)
+    return renewed_surface_pairs(model, x, pairs)
 
 
 @kernel

@@ -12,6 +12,7 @@ def explicit_euler_step(model, state, scratch, h, pairs):
     accelerations(model, x, v, h, a, columns)
     add_scaled(x, x, h, v)
     add_scaled(v, v, h, a)
+    return pairs   # the body-body pair list: the post-step pass's to use
 
 
 @kernel

@@ -36,6 +36,8 @@ from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
+from ..implicit.own_contact import MOST_OWN_REDOS, any_self_collision, grown_own_pairs, \
+    own_pairs_touching
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
@@ -96,10 +98,10 @@ def solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x, v, dv, 
 @kernel
 def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
                         work, kind, terrain, normal_floor, friction_damping, last_change,
-                        statistics, listed_points, listed_edges):
+                        statistics, pairs):
     """One step; adds its conjugate-gradient iterations and linear solves to statistics.
-    ``listed_points`` and ``listed_edges``: the post-step pass's surface pairs at x, whose pairs
-    of one body the solve takes as contacts (implicit/ball_contact.find_solve_contacts).
+    ``pairs``: the post-step pass's surface pair list at x, whose pairs of one body in contact,
+    at x and at each Newton estimate, the solve takes as contacts (implicit/own_contact.py).
 
     The first solve starts along the last step's velocity change (last_change, kept in the
     state; cg.mass_start says why). The solution is the same to the CG tolerance. Later Newton
@@ -107,12 +109,15 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
     blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms, kept = work
     pattern = layout.diagonal
     find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
-    contacts = find_solve_contacts(model, x, v, h, kept, listed_points, listed_edges)
+    own_points, own_edges, pairs = own_pairs_touching(model, x, pairs)
+    contacts = find_solve_contacts(model, x, v, h, kept, own_points, own_edges)
     dv[:] = 0.0
     x_k[:] = x
     v_k[:] = v
     no_guess = np.zeros((0, 3))
-    for newton in range(newton_iterations_needed(model, contacts, v, h, newton_iterations)):
+    needed = newton_iterations_needed(model, contacts, v, h, newton_iterations)
+    newton = redone = 0
+    while newton < needed:
         guess = last_change if newton == 0 else no_guess
         assemble_diagonal_and_terms(model, pattern, x_k, 1.0, h, h * h, blocks, terms)
         newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
@@ -133,15 +138,30 @@ def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, ma
                                                  max_iterations, reaction, r, s, c, q)
         statistics[0] += iterations
         statistics[1] += solves
+        if redone < MOST_OWN_REDOS and any_self_collision(model):
+            # the own pairs this solve brings into contact (own_contact.py): where there are
+            # new ones, this iteration is solved again with them, from where it started
+            add_scaled(v_k, v_k, 1.0, ddv)
+            add_scaled(x_k, x, h, v_k)
+            own_points, own_edges, grew, pairs = grown_own_pairs(model, x_k, pairs, own_points,
+                                                                 own_edges)
+            add_scaled(v_k, v, 1.0, dv)
+            add_scaled(x_k, x, h, v_k)
+            if grew:
+                contacts = find_solve_contacts(model, x, v, h, kept, own_points, own_edges)
+                redone += 1
+                continue
         add_scaled(dv, dv, 1.0, ddv)
         add_scaled(v_k, v, 1.0, dv)
         add_scaled(x_k, x, h, v_k)
+        newton += 1
     if apply_contact_friction(model, contacts, x_k, v_k, h):   # the penalty contacts' friction
         add_scaled(x_k, x, h, v_k)
     x[:] = x_k
     last_change[:] = dv
     restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect
     v[:] = v_k
+    return pairs
 
 
 @kernel
@@ -164,9 +184,9 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     statistics; ``pairs`` is the post-step pass's list at the step's start."""
     x, v, kind, terrain, normal_floor, friction_damping, last_change = state
     layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
-    backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
-                        work, kind, terrain, normal_floor, friction_damping, last_change,
-                        statistics, pairs[0], pairs[1])
+    return backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance,
+                               max_iterations, work, kind, terrain, normal_floor,
+                               friction_damping, last_change, statistics, pairs)
 
 
 @kernel

@@ -19,6 +19,7 @@ def midpoint_step(model, state, scratch, h, pairs):
     accelerations(model, x_mid, v_mid, h, a, columns)
     add_scaled(x, x, h, v_mid)
     add_scaled(v, v, h, a)
+    return pairs   # the body-body pair list: the post-step pass's to use
 
 
 @kernel

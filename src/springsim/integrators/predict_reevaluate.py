@@ -33,6 +33,7 @@ def predict_reevaluate_step(model, state, scratch, h, pairs):
     apply_contact_forces(model, x_p, v, h, a)   # stops v, which the update changes (module doc)
     add_scaled(x, x, h, v_p)
     add_scaled(v, v, h, a)
+    return pairs   # the body-body pair list: the post-step pass's to use
 
 
 @kernel

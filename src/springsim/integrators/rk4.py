@@ -27,6 +27,7 @@ def rk4_step(model, state, scratch, h, pairs):
     middle_stage(x, v, a, x_k, v_k, dx, dv, h)
     accelerations(model, x_k, v_k, h, a, columns)  # k4
     last_stage(x, v, a, v_k, dx, dv, h)
+    return pairs   # the body-body pair list: the post-step pass's to use
 
 
 # The stages' sums, each in one pass over the particles: at 1,000,000 particles these passes only

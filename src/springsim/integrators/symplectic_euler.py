@@ -12,6 +12,7 @@ def symplectic_euler_step(model, state, scratch, h, pairs):
     accelerations(model, x, v, h, a, columns)
     add_scaled(v, v, h, a)
     add_scaled(x, x, h, v)
+    return pairs   # the body-body pair list: the post-step pass's to use
 
 
 @kernel
