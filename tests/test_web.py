@@ -11,6 +11,7 @@ import itertools
 import json
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -103,32 +104,72 @@ def browser_shot_once(browser, url, folder, shows, seconds=150):
     loaded machine, never return (a CI run hung 120 s). Here the test looks every half second
     until the picture shows what it waits for, or gives the last picture after `seconds`.
     """
-    debug_port = free_port()
-    process = subprocess.Popen(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
-         "--hide-scrollbars", f"--user-data-dir={folder / 'profile'}",
-         f"--remote-debugging-port={debug_port}", "--window-size=960,600", url],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    profile, log_path = folder / "profile", folder / "chromium.log"
+    with open(log_path, "wb") as log:
+        # Port 0: chromium picks a free port itself and names it in the profile (no race with a
+        # port chosen here and taken by someone else before chromium binds it). Its own session
+        # (process group), so teardown can end its renderer, GPU and zygote children with it.
+        process = subprocess.Popen(
+            [browser, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+             "--hide-scrollbars", f"--user-data-dir={profile}", "--remote-debugging-port=0",
+             "--window-size=960,600", url],
+            stdout=subprocess.DEVNULL, stderr=log, start_new_session=True)
+
+    def check_alive():
+        # a chromium that died (bad flag, missing library, crash) fails the test now, with its
+        # own words, instead of after the whole wait
+        assert process.poll() is None, (f"chromium exited with code {process.returncode}:\n"
+                                        + log_path.read_text(errors="replace")[-3000:])
+
     deadline = time.monotonic() + seconds
     try:
-        with devtools_page(debug_port, deadline) as call:
+        with devtools_page(devtools_port(profile, deadline, check_alive), deadline,
+                           check_alive) as call:
             call("Emulation.setDeviceMetricsOverride", width=960, height=600,
                  deviceScaleFactor=1, mobile=False)
             while True:
+                check_alive()
                 png = base64.b64decode(call("Page.captureScreenshot", format="png")["data"])
                 picture = iio.imread(png)[..., :3].astype(int)
                 if shows(picture) or time.monotonic() > deadline:
                     return picture
                 time.sleep(0.5)
     finally:
-        process.kill()
-        process.wait()
+        end_process_group(process)
+
+
+def end_process_group(process, grace=5):
+    """SIGTERM to the process's whole group, then SIGKILL to whatever of it is left after `grace`.
+
+    Killing only the browser process could leave its children running after the test."""
+    with contextlib.suppress(ProcessLookupError):  # the group may be gone already
+        os.killpg(process.pid, signal.SIGTERM)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        process.wait(timeout=grace)
+    with contextlib.suppress(ProcessLookupError):  # the browser if it hangs, or a straggling child
+        os.killpg(process.pid, signal.SIGKILL)
+    process.wait()
+
+
+def devtools_port(profile, deadline, check_alive):
+    """The port chromium chose for `--remote-debugging-port=0`: the first line of the
+    DevToolsActivePort file it writes into its profile once DevTools listens."""
+    active_port = profile / "DevToolsActivePort"
+    while True:
+        check_alive()
+        with contextlib.suppress(OSError):  # not written yet
+            port, newline, _ = active_port.read_text().partition("\n")
+            if newline:  # the whole first line is there, not half of it
+                return int(port)
+        assert time.monotonic() < deadline, "chromium wrote no DevToolsActivePort file"
+        time.sleep(0.2)
 
 
 @contextlib.contextmanager
-def devtools_page(debug_port, deadline):
+def devtools_page(debug_port, deadline, check_alive):
     """`call(method, **params)` on chromium's page over its DevTools websocket."""
     while True:
+        check_alive()
         try:
             listing_url = f"http://127.0.0.1:{debug_port}/json/list"
             with urllib.request.urlopen(listing_url, timeout=2) as listing:
