@@ -6,9 +6,9 @@ step h, using the work arrays in ``scratch``; ``pairs`` is the body-body pair li
 start (every surface pair within contact there: surface_collisions.py), which the explicit
 methods leave to the pass after the step and backward Euler's solve also takes a body's own
 pairs from (implicit/own_contact.py). It returns the list for that pass: ``pairs``, or one
-renewed within the step (backward Euler's, at its Newton estimate). ``drive`` takes whole steps with it: step, then everything
-that follows every integrator's update (``finish_step``: impacts, body-body contact, the divergence
-check). Each integrator file binds its step in a two-line cached kernel,
+renewed within the step (backward Euler's, at its Newton estimate). ``drive`` takes whole steps
+with it: step, then everything that follows every integrator's update (``finish_step``:
+impacts, body-body contact, the divergence check). Each integrator file binds its step in a two-line cached kernel,
 ``advance = drive(its_step, model, state, its_scratch(x), h, steps, pairs)``, where ``pairs`` is
 the body-body pair list the last call left (Integrator.pair_list), returned for the next.
 
