@@ -10,15 +10,17 @@ The cube (4 x 4 x 4 particles of 0.5 or 2 kg: 32 or 128 kg) falls from 0.45 m ab
 (default 5 m/s), at dt 1/60 and 1/30 s. Crossings are counted with tests/crossings.py (plain
 NumPy, independent of springsim) after every step. Each row: the worst crossings for each shift.
 
-Measured 2026-11-25 at 5 m/s, the solve taking the own pairs in contact at the step's start
-only (commit 3f5f397) against those at the end of each solve too (the solve done again with
-them: implicit/own_contact.py):
-    1/60 s, 32 kg:  [20, 17, 0, 0, 0, 4]               -> [0, 0, 0, 0, 0, 0]
-    1/60 s, 128 kg: [100, 88, 189, 64, 2644, 2150]     -> [28, 1189, 0, 0, 1687, 1642]
-    1/30 s, 32 kg:  [0, 8, 0, 0, 0, 0]                 -> [0, 0, 0, 0, 0, 0]
-    1/30 s, 128 kg: [79, 53, 1411, 54, 1352, 113]      -> [10, 49, 1017, 1573, 776, 22]
-16 of the 24 runs crossed before, 10 after; the 128 kg cube still presses the layers through
-(the penalty contacts' stiffness is scaled by the cloth particles' masses, not by the load).
+Measured 2026-11-25 at 5 m/s, worst crossings per shift, with the own pairs at the end of each
+solve (implicit/own_contact.py) and strict IEEE arithmetic (src/springsim/_jit.py):
+    1/60 s, 32 kg:  [0, 0, 0, 0, 0, 0]
+    1/60 s, 128 kg: [0, 1246, 0, 1256, 1479, 0]
+    1/30 s, 32 kg:  [0, 0, 0, 0, 0, 0]
+    1/30 s, 128 kg: [3, 790, 807, 1165, 1065, 8]
+With the start's own pairs alone (commit 3f5f397) 16 of the 24 runs crossed; the 128 kg cube
+still presses the layers through in 8 of 12. Figures measured before the kernels gave up
+fast-math depended on whether the kernels had been compiled in the process or loaded from the
+cache (1,628 or 8 crossings for one run: tests/test_cache.py), so older figures compare only
+roughly.
 """
 import sys
 from pathlib import Path

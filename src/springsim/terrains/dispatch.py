@@ -15,7 +15,7 @@ import linecache
 
 from numba import njit
 
-from .._jit import FASTMATH_FLAGS
+from .._jit import FASTMATH
 from .base import KINDS
 
 FILENAME = "<springsim.terrains.dispatch: generated>"
@@ -42,7 +42,7 @@ def dispatcher_source(count: int) -> str:
 
 
 def inlined(dispatcher):
-    return njit(fastmath=FASTMATH_FLAGS, error_model="numpy", inline="always")(
+    return njit(fastmath=FASTMATH, error_model="numpy", inline="always")(
         dispatcher.py_func)
 
 
@@ -57,7 +57,7 @@ def build_dispatcher(kinds):
     # registered with linecache so that tracebacks and Numba's error messages can show it
     linecache.cache[FILENAME] = (len(source), None, source.splitlines(True), FILENAME)
     exec(compile(source, FILENAME, "exec"), namespace)
-    return njit(fastmath=FASTMATH_FLAGS, error_model="numpy", inline="always")(
+    return njit(fastmath=FASTMATH, error_model="numpy", inline="always")(
         namespace["terrain_distance"])
 
 
