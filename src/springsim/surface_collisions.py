@@ -135,6 +135,17 @@ def start_surface_pairs(model, x):
     return unfolded_now_or_searched(model, x, skin)
 
 
+@inline_kernel
+def pairs_at(model, x, pairs):
+    """The pair list at x: ``pairs`` while it still holds there (``list_holds``), else one
+    renewed there (``renewed_surface_pairs``; NaN too: a search copes with it). The one rule for
+    a list after a step, at a call's start and at a Newton estimate, so that all three agree.
+    Inlined: where the list holds, no call takes the model."""
+    if list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
+        return pairs
+    return renewed_surface_pairs(model, x, pairs)
+
+
 @kernel
 def renewed_surface_pairs(model, x, pairs):
     """The pair list at x once the spread no longer keeps ``pairs`` (list_holds): none where
@@ -268,8 +279,7 @@ def resolve_contacts(model, x, v, start, pairs):
     the model."""
     if model.surface_triangles.shape[0] > 0:
         pairs[3][0] += 1   # the steps it has been kept
-        if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
-            pairs = renewed_surface_pairs(model, x, pairs)   # NaN too: a search copes with it
+        pairs = pairs_at(model, x, pairs)
     balls = ball_pairs(x, model.radius, model.balls, model.ball_slot)
     if pairs[0].shape[0] + pairs[1].shape[0] + balls.shape[0] > 0:
         respond_to_contacts(model, x, v, start, pairs[0], pairs[1], balls)

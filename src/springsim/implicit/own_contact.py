@@ -25,7 +25,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..proximity import edge_distance, point_triangle_distance
-from ..surface_collisions import list_holds, renewed_surface_pairs
+from ..surface_collisions import pairs_at
 
 MOST_OWN_REDOS = 4   # times a step may solve a Newton iteration again for its own pairs
 
@@ -43,12 +43,10 @@ def own_pairs_touching(model, x, pairs):
     there (which the step hands on to the post-step pass: the renewal is not paid twice)."""
     if not any_self_collision(model):
         return np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), pairs
-    if not list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
-        pairs = renewed_surface_pairs(model, x, pairs)
-    points = own_touching(model, x, pairs[0], True)
-    edges = own_touching(model, x, pairs[1], False)
-    return (sorted_union(points, points[:0], model.surface_triangles.shape[0]),
-            sorted_union(edges, edges[:0], model.surface_edges.shape[0]), pairs)
+    pairs = pairs_at(model, x, pairs)
+    return (sorted_rows(own_touching(model, x, pairs[0], True), model.surface_triangles.shape[0]),
+            sorted_rows(own_touching(model, x, pairs[1], False), model.surface_edges.shape[0]),
+            pairs)
 
 
 @kernel
@@ -71,18 +69,16 @@ def own_touching(model, x, pairs, point_triangle):
 
 
 @kernel
-def sorted_union(a, b, base):
-    """The rows of a and b, each once, sorted (rows (i, j) with 0 <= j < base)."""
-    keys = np.empty(a.shape[0] + b.shape[0], np.int64)
-    for k in range(a.shape[0]):
-        keys[k] = a[k, 0] * base + a[k, 1]
-    for k in range(b.shape[0]):
-        keys[a.shape[0] + k] = b[k, 0] * base + b[k, 1]
+def sorted_rows(rows, base):
+    """The rows, each once, sorted (rows (i, j) with 0 <= j < base)."""
+    keys = np.empty(rows.shape[0], np.int64)
+    for k in range(rows.shape[0]):
+        keys[k] = rows[k, 0] * base + rows[k, 1]
     keys = np.unique(keys)
-    rows = np.empty((keys.shape[0], 2), np.int64)
+    unique = np.empty((keys.shape[0], 2), np.int64)
     for k in range(keys.shape[0]):
-        rows[k, 0], rows[k, 1] = keys[k] // base, keys[k] % base
-    return rows
+        unique[k, 0], unique[k, 1] = keys[k] // base, keys[k] % base
+    return unique
 
 
 @kernel
@@ -90,7 +86,8 @@ def grown_own_pairs(model, x_k, pairs, own_points, own_edges):
     """(own point pairs, own edge pairs, whether they grew, the list at x_k): those given and
     those in contact at the estimate x_k (own_pairs_touching)."""
     more_points, more_edges, pairs = own_pairs_touching(model, x_k, pairs)
-    points = sorted_union(own_points, more_points, model.surface_triangles.shape[0])
-    edges = sorted_union(own_edges, more_edges, model.surface_edges.shape[0])
+    points = sorted_rows(np.concatenate((own_points, more_points)),
+                         model.surface_triangles.shape[0])
+    edges = sorted_rows(np.concatenate((own_edges, more_edges)), model.surface_edges.shape[0])
     grew = points.shape[0] > own_points.shape[0] or edges.shape[0] > own_edges.shape[0]
     return points, edges, grew, pairs

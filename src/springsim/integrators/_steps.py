@@ -25,8 +25,7 @@ from numba import prange
 from .._jit import inline_kernel, kernel
 from ..contact import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import (list_holds, renewed_surface_pairs, resolve_contacts,
-                                  start_surface_pairs)
+from ..surface_collisions import pairs_at, resolve_contacts, start_surface_pairs
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -64,9 +63,7 @@ def pairs_now(model, x, pairs):
         return pairs
     if pairs[2].shape[0] != x.shape[0]:
         return start_surface_pairs(model, x)
-    if list_holds(model.surface_points, model.body_thickness, x, pairs[2]):
-        return pairs
-    return renewed_surface_pairs(model, x, pairs)
+    return pairs_at(model, x, pairs)
 
 
 @kernel
