@@ -3,6 +3,7 @@ folders are deleted once unused for STALE_DAYS, the current one and recently use
 import os
 import shutil
 import time
+from pathlib import Path
 
 from springsim._jit import PACKAGE, STALE_DAYS, kernel_sources, remove_stale_caches, \
     source_fingerprint
@@ -60,27 +61,16 @@ def test_kernel_sources_are_the_kernel_modules_and_their_imports():
     assert not names & {"cli.py", "simulation.py", "recording.py", "commands/run.py"}
 
 
-FOLDED_CLOTH_RUN = """
+TESTS = Path(__file__).resolve().parent
+FOLDED_CLOTH_RUN = f"""
 import hashlib
-import springsim
-from springsim.bodies.cloth import Cloth
-from springsim.bodies.cube import Cube
-from springsim.scene import Scene
-from springsim.terrains.plane import Plane
+import sys
+sys.path.insert(0, {str(TESTS)!r})
+from test_implicit_surface_contact import cube_onto_folded_cloth
 
 def folded_cloth_run():
-    cloth = Cloth(particles_per_edge=8, width=0.5, height=0.5, rotation_degrees=0.0,
-                  pinned="none", position=(0.0, 0.05, 0.0))
-    cube = Cube(particles_per_edge=3, edge_length=0.15, position=(0.01, 0.3, -0.1),
-                velocity=(0.0, -3.0, 0.0))
-    simulation = springsim.Simulation(Scene(bodies=[cloth, cube], terrains=[Plane(point=(0.0, 0.0, 0.0))],
-                                            dt=1.0 / 60.0), integrator="implicit_euler")
-    sheet = simulation.positions[:64]
-    far = sheet[:, 2] > 0.0
-    sheet[far, 2] = -sheet[far, 2]
-    sheet[far, 1] += 1.5 * cloth.contact_thickness()
-    simulation.positions[:64] = sheet
-    simulation.step(20)
+    simulation = cube_onto_folded_cloth(1.0 / 60.0, 5.0, shift=0.031)
+    simulation.step(8)
     return hashlib.sha256(simulation.positions.tobytes()
                           + simulation.velocities.tobytes()).hexdigest()
 """

@@ -5,10 +5,10 @@ kernel was compiled in this process or loaded from the cache. LLVM's fast-math f
 (reassoc, contract) let it reorder sums and fuse multiply-adds differently in each compilation
 context: a backward-Euler step compiled in the process differed from the cached one by 3e-17 m,
 and a chaotic run (a cube pressing a folded cloth) ended 0.5 m apart after 8 steps
-(tests/test_cache.py). Without them, 2026-11-25, alternating runs: rk4's jelly cube and cloth
-scenes within 1%, three stacked cubes 6% and backward Euler on the jelly cube 10-12% slower. ``error_model="numpy"`` lets a division by
-zero give inf or NaN (which the divergence check reports) instead of a branch and an exception
-in every inner loop.
+(tests/test_cache.py). Without them, 2026-11-25, alternating runs: rk4's jelly cube and
+cloth-drape within 1%, cloth-balls about 2%, three stacked cubes 6% and backward Euler on the
+jelly cube 10-12% slower. ``error_model="numpy"`` lets a division by zero give inf or NaN (which
+the divergence check reports) instead of a branch and an exception in every inner loop.
 
 Numba invalidates a cached kernel only when the kernel's own file changes, not when a kernel it
 calls (in another file) does, nor a constant it reads from another module (compiled in as a

@@ -8,9 +8,10 @@ methods leave to the pass after the step and backward Euler's solve also takes a
 pairs from (implicit/own_contact.py). It returns the list for that pass: ``pairs``, or one
 renewed within the step (backward Euler's, at its Newton estimate). ``drive`` takes whole steps
 with it: step, then everything that follows every integrator's update (``finish_step``:
-impacts, body-body contact, the divergence check). Each integrator file binds its step in a two-line cached kernel,
-``advance = drive(its_step, model, state, its_scratch(x), h, steps, pairs)``, where ``pairs`` is
-the body-body pair list the last call left (Integrator.pair_list), returned for the next.
+impacts, body-body contact, the divergence check). Each integrator file binds its step in a
+two-line cached kernel, ``advance = drive(its_step, model, state, its_scratch(x), h, steps,
+pairs)``, where ``pairs`` is the body-body pair list the last call left
+(Integrator.pair_list), returned for the next.
 
 Why ``drive`` is inlined rather than a kernel that takes the step as an argument: Numba types a
 function passed as an argument by the identity of its dispatcher object, which is new in every
