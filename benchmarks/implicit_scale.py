@@ -31,7 +31,7 @@ def measure(name, steps, dt=1 / 60, threads=None, skip=0):
     started = time.perf_counter()
     simulation.step(steps)
     seconds = time.perf_counter() - started
-    iterations, solves = simulation.integrator.statistics - before
+    iterations, solves = (simulation.integrator.statistics - before)[:2]
     return {"row": name, "particles": simulation.model.particle_count,
             "ms_per_step": 1000 * seconds / steps, "cg_per_step": iterations / steps,
             "solves_per_step": solves / steps}

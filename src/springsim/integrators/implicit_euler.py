@@ -36,6 +36,8 @@ from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
+from ..surface_collisions import pairs_at
+from ..implicit.halving import MOST_HALVINGS, carried_through, copy_state, saved_state
 from ..implicit.own_contact import MOST_OWN_REDOS, any_self_collision, grown_own_pairs, \
     own_pairs_touching
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
@@ -181,7 +183,33 @@ def workspace(layout, x, kept):
 def implicit_euler_step(model, state, scratch, h, pairs):
     """backward_euler_step as the driver calls it: the state carries the contacts
     (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
-    statistics; ``pairs`` is the post-step pass's list at the step's start."""
+    statistics; ``pairs`` is the post-step pass's list at the step's start. A step that
+    carries a surface through another is taken again in halves (implicit/halving.py), counted
+    in statistics[2]."""
+    if model.surface_triangles.shape[0] == 0:
+        return state_step(model, state, scratch, h, pairs)
+    whole = 1 << MOST_HALVINGS
+    done, size = 0, whole
+    saved = saved_state(state)
+    while done < whole:
+        # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
+        ended = pairs_at(model, state[0], state_step(model, state, scratch, h * size / whole,
+                                                      pairs))
+        if size > 1 and carried_through(model, saved[0], state[0], ended, scratch[4][15]):
+            copy_state(state, saved)   # back to the start, to go again in halves (halving.py)
+            size //= 2
+            scratch[5][2] += 1
+            continue
+        pairs = ended
+        done += size
+        if done < whole:
+            copy_state(saved, state)
+    return pairs
+
+
+@kernel
+def state_step(model, state, scratch, h, pairs):
+    """One backward_euler_step of ``state`` with ``scratch`` (implicit_euler_step)."""
     x, v, kind, terrain, normal_floor, friction_damping, last_change = state
     layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
     return backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance,
@@ -231,8 +259,9 @@ class ImplicitEuler(Integrator):
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
-        # running totals, for diagnostics: conjugate-gradient iterations, linear solves
-        self.statistics = np.zeros(2, np.int64)
+        # running totals, for diagnostics: conjugate-gradient iterations, linear solves, steps
+        # taken again in halves (implicit/halving.py)
+        self.statistics = np.zeros(3, np.int64)
 
     def solve_pair_list(self, model, x):
         """The solve's surface pair list (implicit/surface_contact.py), kept from call to call
