@@ -11,16 +11,17 @@ The cube (4 x 4 x 4 particles of 0.5 or 2 kg: 32 or 128 kg) falls from 0.45 m ab
 NumPy, independent of springsim) after every step. Each row: the worst crossings for each shift.
 
 Measured 2026-11-25 at 5 m/s, worst crossings per shift, with the own pairs at the end of each
-solve (implicit/own_contact.py) and strict IEEE arithmetic (src/springsim/_jit.py):
+solve (implicit/own_contact.py), strict IEEE arithmetic (src/springsim/_jit.py) and the steps
+that carry a surface through another taken again in halves (implicit/halving.py):
     1/60 s, 32 kg:  [0, 0, 0, 0, 0, 0]
-    1/60 s, 128 kg: [0, 1246, 0, 1256, 1479, 0]
+    1/60 s, 128 kg: [0, 0, 0, 0, 0, 0]
     1/30 s, 32 kg:  [0, 0, 0, 0, 0, 0]
-    1/30 s, 128 kg: [3, 790, 807, 1165, 1065, 8]
-With the start's own pairs alone (commit 3f5f397) 16 of the 24 runs crossed; the 128 kg cube
-still presses the layers through in 8 of 12. Figures measured before the kernels gave up
-fast-math depended on whether the kernels had been compiled in the process or loaded from the
-cache (1,628 or 8 crossings for one run: tests/test_cache.py), so older figures compare only
-roughly.
+    1/30 s, 128 kg: [0, 0, 0, 0, 0, 0]
+Without the halving (commit 44ffd89) the 128 kg rows were [0, 1246, 0, 1256, 1479, 0] and
+[3, 790, 807, 1165, 1065, 8]; with the start's own pairs alone (commit 3f5f397) 16 of the 24
+runs crossed. Figures measured before the kernels gave up fast-math depended on whether the
+kernels had been compiled in the process or loaded from the cache (1,628 or 8 crossings for one
+run: tests/test_cache.py), so older figures compare only roughly.
 """
 import sys
 from pathlib import Path

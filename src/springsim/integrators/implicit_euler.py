@@ -190,20 +190,26 @@ def implicit_euler_step(model, state, scratch, h, pairs):
         return state_step(model, state, scratch, h, pairs)
     whole = 1 << MOST_HALVINGS
     done, size = 0, whole
-    saved = saved_state(state)
+    start = saved = saved_state(state)   # the step's start, and the current part's
+    pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
         ended = pairs_at(model, state[0], state_step(model, state, scratch, h * size / whole,
                                                       pairs))
-        if size > 1 and carried_through(model, saved[0], state[0], ended, scratch[4][15]):
-            copy_state(state, saved)   # back to the start, to go again in halves (halving.py)
+        if carried_through(model, saved[0], state[0], ended, scratch[4][15]):
+            if size == 1:   # even the shortest part crossed: the step as it was (halving.py)
+                copy_state(state, start)
+                return state_step(model, state, scratch, h, pairs_at_start)
+            copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
             scratch[5][2] += 1
             continue
         pairs = ended
         done += size
+        if done % (2 * size) == 0 and size < whole:
+            size *= 2   # the halves went through: back to longer steps
         if done < whole:
-            copy_state(saved, state)
+            saved = saved_state(state)
     return pairs
 
 
