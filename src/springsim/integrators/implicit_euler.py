@@ -21,14 +21,17 @@ or released between solves with the terrain contacts. Without them the solve wou
 into a ball faster than the post-step correction pushes it out, and at large steps a dropped or
 thrown ball would pass through the cloth. When nothing is constrained, each solve ends with a
 correction along the rigid translations that makes it conserve momentum to rounding, not just to
-the solve's tolerance (cg.py). After each step the impact and collision passes and the
-divergence check every integrator runs (``_steps.finish_step``).
+the solve's tolerance (cg.py). A step that carries a surface through another (stiff as they
+are, penalty contacts give under a heavy enough load) is taken again in halves
+(implicit/halving.py). After each step the impact and collision passes and the divergence check
+every integrator runs (``_steps.finish_step``).
 """
 import numpy as np
 
 from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import force_columns, spring_forces
+from ..surface_collisions import pairs_at
 from ..implicit.ball_contact import (find_solve_contacts, linearize_contacts,
                                      newton_iterations_needed, update_active_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
@@ -36,7 +39,6 @@ from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
-from ..surface_collisions import pairs_at
 from ..implicit.halving import MOST_HALVINGS, carried_through, copy_state, saved_state
 from ..implicit.own_contact import MOST_OWN_REDOS, any_self_collision, grown_own_pairs, \
     own_pairs_touching
@@ -188,6 +190,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     in statistics[2]."""
     if model.surface_triangles.shape[0] == 0:
         return state_step(model, state, scratch, h, pairs)
+    kept, statistics = scratch[4][15], scratch[5]   # the solve's pair list (workspace)
     whole = 1 << MOST_HALVINGS
     done, size = 0, whole
     start = saved = saved_state(state)   # the step's start, and the current part's
@@ -196,13 +199,13 @@ def implicit_euler_step(model, state, scratch, h, pairs):
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
         ended = pairs_at(model, state[0], state_step(model, state, scratch, h * size / whole,
                                                       pairs))
-        if carried_through(model, saved[0], state[0], ended, scratch[4][15]):
+        if carried_through(model, saved[0], state[0], ended, kept):
             if size == 1:   # even the shortest part crossed: the step as it was (halving.py)
                 copy_state(state, start)
                 return state_step(model, state, scratch, h, pairs_at_start)
             copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
-            scratch[5][2] += 1
+            statistics[2] += 1
             continue
         pairs = ended
         done += size
