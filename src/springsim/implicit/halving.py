@@ -13,7 +13,7 @@ cannot hold at any step), halving does not help, and the step is taken whole fro
 it would be without the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part,
 threw itself 10 m up, where taken whole it stays down, crossed as it was without the check. So
 a step never loops, and one that halving cannot help ends as without it, at the cost of the
-parts that failed (five solves where none passes). A step that crosses nothing is taken as
+parts that failed (seven solves where none passes). A step that crosses nothing is taken as
 before, bit for bit, at the cost of the check over the pairs in reach and of keeping the state
 it started from.
 
@@ -36,7 +36,7 @@ import numpy as np
 from .._jit import kernel
 from ..geometry import closest_on_segments, closest_on_triangle
 
-MOST_HALVINGS = 4   # a step is cut into at most 2^MOST_HALVINGS steps
+MOST_HALVINGS = 6   # a step is cut into parts down to 1 / 2^MOST_HALVINGS of it
 PASS_TOLERANCE = 0.25   # of the rest distance: how near, where coplanar, counts as through
 BISECTIONS = 30   # halvings of the step that find where four points are coplanar
 

@@ -184,8 +184,9 @@ def workspace(layout, x, kept):
 @kernel
 def implicit_euler_step(model, state, scratch, h, pairs):
     """backward_euler_step as the driver calls it: the state carries the contacts
-    (state.ContactMemory), the scratch the pattern, the settings, the work arrays and the
-    statistics; ``pairs`` is the post-step pass's list at the step's start. A step that
+    (state.ContactMemory), the scratch the pattern, the settings, the work arrays, the
+    statistics and room for the state at the step's start; ``pairs`` is the post-step pass's
+    list at the step's start. A step that
     carries a surface through another is taken again in halves (implicit/halving.py), counted
     in statistics[2]."""
     if model.surface_triangles.shape[0] == 0:
@@ -193,7 +194,8 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     kept, statistics = scratch[4][15], scratch[5]   # the solve's pair list (workspace)
     whole = 1 << MOST_HALVINGS
     done, size = 0, whole
-    start = saved = saved_state(state)   # the step's start, and the current part's
+    start = saved = scratch[6]   # the step's start, and the current part's
+    copy_state(start, state)
     pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
@@ -220,7 +222,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
 def state_step(model, state, scratch, h, pairs):
     """One backward_euler_step of ``state`` with ``scratch`` (implicit_euler_step)."""
     x, v, kind, terrain, normal_floor, friction_damping, last_change = state
-    layout, newton_iterations, tolerance, max_iterations, work, statistics = scratch
+    layout, newton_iterations, tolerance, max_iterations, work, statistics, _ = scratch
     return backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance,
                                max_iterations, work, kind, terrain, normal_floor,
                                friction_damping, last_change, statistics, pairs)
@@ -237,11 +239,11 @@ def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_ite
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
     call) to the next, last_change the velocity change; statistics[0] and [1] count the
     conjugate-gradient iterations and the linear solves."""
+    state = (x, v, kind, terrain, normal_floor, friction_damping, last_change)
+    # the last entry: room for a step's start, which a step taken again in halves goes back to
     scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x, kept),
-               statistics)
-    return drive(implicit_euler_step, model, (x, v, kind, terrain, normal_floor,
-                                              friction_damping, last_change), scratch, h, steps,
-                 pairs)
+               statistics, saved_state(state))
+    return drive(implicit_euler_step, model, state, scratch, h, steps, pairs)
 
 
 @register
