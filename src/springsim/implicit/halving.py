@@ -12,44 +12,60 @@ even that crosses (a cloth already tangled, passing out as well as in, or a load
 cannot hold at any step), halving does not help, and the step is taken whole from its start, as
 it would be without the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part,
 threw itself 10 m up, where taken whole it stays down, crossed as it was without the check. So
-a step never loops, and one that halving cannot help ends as without it, at the cost of the
-parts that failed (seven solves where none passes). A step that crosses nothing is taken as
-before, bit for bit, at the cost of the check over the pairs in reach and of keeping the state
-it started from.
+a step never loops, and one that halving cannot help ends as without it (but for the solve's
+own pair list, surface_contact.py, which a rejected part may have renewed and which is not put
+back: a list kept longer only holds more candidates, farther than the solve's reach), at the
+cost of the parts it tried: seven steps' work where no part passes, more where some pass before
+one fails. A step that crosses nothing is taken as before, bit for bit, at the cost of the check
+over the pairs in reach and of copying the state it started from.
 
-What the check sees: the pairs of the surface lists at the step's end (the post-step pass's,
-which holds a body's own pairs within reach there, and the solve's, which holds the pairs of two
-bodies the step could bring together). The four points of a pair are taken to move linearly from
-the step's start to its end; where the volume they span changes sign they were coplanar during
-the step (the moment found by bisection), and if there the point lies within PASS_TOLERANCE of
-its rest distance of the triangle (or the edges of each other) it passed through. Edges turning
-past parallel at a distance, a point passing beside a triangle, a pair crossed at the start that
-stays crossed: none of these counts. Not seen: a pair carried out of the lists' reach by the end
-of the step (beyond its rest distance plus the skin, surface_collisions.py), and neighbours along
-a surface edge, which self-contact leaves out (a cloth folded sharply along a line can still
-cross itself there: a 32 kg cube at 10 m/s did, in 2 of 6 runs at 1/60 s).
+What the check sees: the pairs of the surface lists at the step's end (the solve's, which holds
+the pairs of two bodies the step could bring together, and for a self-colliding body the
+post-step pass's, which holds its own pairs within reach there). The four points of a pair are
+taken to move linearly from the step's start to its end; where the volume they span changes sign
+they were coplanar during the step (the moment found by bisection), and if there the point lies
+within PASS_TOLERANCE of its rest distance of the triangle (or the edges of each other) it
+passed through. Edges turning past parallel at a distance, a point passing beside a triangle, a
+pair crossed at the start that stays crossed: none of these counts (a pair crossed at the start
+that passes back out does, so a tangled cloth pays for halvings that cannot help). Not seen: a
+pass through and back within one step (the volume's sign is the same at both ends), a pair whose
+volume changes sign more than once (the bisection finds one of the moments), a pair carried out
+of the lists' reach by the end of the step (beyond its rest distance plus the skin,
+surface_collisions.py), and neighbours along a surface edge, which self-contact leaves out (a
+cloth folded sharply along a line can still cross itself there: a 32 kg cube at 10 m/s did, in 2
+of 6 runs at 1/60 s).
 """
 import math
 
 import numpy as np
 
 from .._jit import kernel
-from ..geometry import closest_on_segments, closest_on_triangle
+from ..proximity import edge_distance, point_triangle_distance
+from ..surface_collisions import pairs_at
+from .own_contact import any_self_collision
 
 MOST_HALVINGS = 6   # a step is cut into parts down to 1 / 2^MOST_HALVINGS of it
 PASS_TOLERANCE = 0.25   # of the rest distance: how near, where coplanar, counts as through
 BISECTIONS = 30   # halvings of the step that find where four points are coplanar
+# the four points where they are coplanar, as proximity's helpers read them
+ONE_TRIANGLE = np.array([[0, 1, 2]])   # a triangle (rows 0, 1, 2) and a point (row 3)
+TWO_EDGES = np.array([[0, 1], [2, 3]])
 
 
 @kernel
 def carried_through(model, start, x, pairs, kept):
     """Whether the step from ``start`` to ``x`` carried a point through a triangle or an edge
-    past an edge (module doc): a pair of the post-step list ``pairs`` or of the solve's list
-    ``kept`` (surface_contact.kept_surface_pairs)."""
-    return (any_point_passed(model, start, x, pairs[0])
-            or any_point_passed(model, start, x, kept[0][0])
-            or any_edge_passed(model, start, x, pairs[1])
-            or any_edge_passed(model, start, x, kept[0][1]))
+    past an edge (module doc): a pair of the solve's list ``kept``
+    (surface_contact.kept_surface_pairs) or, for a self-colliding body, of the post-step list
+    ``pairs`` where it holds at x, else of one renewed there (only for the check: the step
+    hands on its own list, so the post-step pass keeps or renews it as before)."""
+    if any_point_passed(model, start, x, kept[0][0]) or any_edge_passed(model, start, x,
+                                                                      kept[0][1]):
+        return True
+    if not any_self_collision(model):
+        return False
+    own = pairs_at(model, x, pairs)
+    return any_point_passed(model, start, x, own[0]) or any_edge_passed(model, start, x, own[1])
 
 
 @kernel
@@ -81,13 +97,10 @@ def point_passed_face(triangles, body, thickness, start, x, p, t, corners):
     a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
     if not coplanar_between(start, x, a, b, c, p, False, corners):
         return False
-    w0, w1, w2 = closest_on_triangle(corners[3], corners)
-    apart = 0.0
-    for i in range(3):
-        apart += (corners[3, i] - w0 * corners[0, i] - w1 * corners[1, i]
-                  - w2 * corners[2, i]) ** 2
     rest = 0.5 * (thickness[body[p]] + thickness[body[a]])
-    return math.sqrt(apart) < PASS_TOLERANCE * rest
+    # its work space is the rows it reads: it copies them onto themselves
+    return point_triangle_distance(corners, ONE_TRIANGLE, 3, 0, corners[:3]) \
+        < PASS_TOLERANCE * rest
 
 
 @kernel
@@ -97,13 +110,8 @@ def edge_passed_edge(edges, body, thickness, start, x, e, f, ends):
     a, b, c, q = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
     if not coplanar_between(start, x, a, b, c, q, True, ends):
         return False
-    s, t = closest_on_segments(ends[0], ends[1], ends[2], ends[3])
-    apart = 0.0
-    for i in range(3):
-        apart += ((1.0 - s) * ends[0, i] + s * ends[1, i] - (1.0 - t) * ends[2, i]
-                  - t * ends[3, i]) ** 2
     rest = 0.5 * (thickness[body[a]] + thickness[body[c]])
-    return math.sqrt(apart) < PASS_TOLERANCE * rest
+    return edge_distance(ends, TWO_EDGES, 0, 1) < PASS_TOLERANCE * rest
 
 
 @kernel
@@ -151,31 +159,3 @@ def volume(at, edges):
         v0, v1, v2 = at[2, 0] - at[0, 0], at[2, 1] - at[0, 1], at[2, 2] - at[0, 2]
         w0, w1, w2 = at[3, 0] - at[0, 0], at[3, 1] - at[0, 1], at[3, 2] - at[0, 2]
     return (u1 * v2 - u2 * v1) * w0 + (u2 * v0 - u0 * v2) * w1 + (u0 * v1 - u1 * v0) * w2
-
-
-@kernel
-def saved_state(state):
-    """A copy of the implicit step's state (implicit_euler.implicit_euler_step's tuple)."""
-    x, v, kind, terrain, normal_floor, friction_damping, last_change = state
-    return (x.copy(), v.copy(), kind.copy(), terrain.copy(), normal_floor.copy(),
-            friction_damping.copy(), last_change.copy())
-
-
-@kernel
-def copy_state(out, state):
-    """Copy the implicit step's ``state`` into ``out`` (one like it, saved_state), in place."""
-    copy_rows(out[0], state[0])
-    copy_rows(out[1], state[1])
-    copy_rows(out[6], state[6])
-    for i in range(state[2].shape[0]):
-        out[2][i] = state[2][i]
-        out[3][i] = state[3][i]
-        out[4][i] = state[4][i]
-        out[5][i] = state[5][i]
-
-
-@kernel
-def copy_rows(out, x):
-    for i in range(x.shape[0]):
-        for c in range(3):
-            out[i, c] = x[i, c]

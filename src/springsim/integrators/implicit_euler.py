@@ -39,7 +39,7 @@ from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
-from ..implicit.halving import MOST_HALVINGS, carried_through, copy_state, saved_state
+from ..implicit.halving import MOST_HALVINGS, carried_through
 from ..implicit.own_contact import MOST_OWN_REDOS, any_self_collision, grown_own_pairs, \
     own_pairs_touching
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
@@ -47,7 +47,7 @@ from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..implicit.surface_contact import kept_surface_pairs
 from . import Integrator, register
-from ._steps import add_scaled, drive
+from ._steps import add_scaled, copy_positions, drive
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
 
@@ -185,23 +185,23 @@ def workspace(layout, x, kept):
 def implicit_euler_step(model, state, scratch, h, pairs):
     """backward_euler_step as the driver calls it: the state carries the contacts
     (state.ContactMemory), the scratch the pattern, the settings, the work arrays, the
-    statistics and room for the state at the step's start; ``pairs`` is the post-step pass's
-    list at the step's start. A step that
-    carries a surface through another is taken again in halves (implicit/halving.py), counted
-    in statistics[2]."""
+    statistics and room for the state at the start of the step and of a part of it; ``pairs`` is
+    the post-step pass's list at the step's start. A step that carries a surface through another
+    is taken again in halves (implicit/halving.py); statistics[2] counts the times a step or a
+    part was cut in half."""
     if model.surface_triangles.shape[0] == 0:
         return state_step(model, state, scratch, h, pairs)
     kept, statistics = scratch[4][15], scratch[5]   # the solve's pair list (workspace)
+    start, part = scratch[6], scratch[7]   # room for the step's start, and a part's
+    copy_state(start, state)
+    saved = start   # where the part being taken started
     whole = 1 << MOST_HALVINGS
     done, size = 0, whole
-    start = saved = scratch[6]   # the step's start, and the current part's
-    copy_state(start, state)
     pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
-        ended = pairs_at(model, state[0], state_step(model, state, scratch, h * size / whole,
-                                                      pairs))
-        if carried_through(model, saved[0], state[0], ended, kept):
+        stepped = state_step(model, state, scratch, h * size / whole, pairs)
+        if carried_through(model, saved[0], state[0], stepped, kept):
             if size == 1:   # even the shortest part crossed: the step as it was (halving.py)
                 copy_state(state, start)
                 return state_step(model, state, scratch, h, pairs_at_start)
@@ -209,20 +209,42 @@ def implicit_euler_step(model, state, scratch, h, pairs):
             size //= 2
             statistics[2] += 1
             continue
-        pairs = ended
+        pairs = stepped
         done += size
         if done % (2 * size) == 0 and size < whole:
             size *= 2   # the halves went through: back to longer steps
         if done < whole:
-            saved = saved_state(state)
+            copy_state(part, state)
+            saved = part
     return pairs
+
+
+@kernel
+def saved_state(state):
+    """A copy of the implicit step's state (the tuple implicit_euler_step takes)."""
+    x, v, kind, terrain, normal_floor, friction_damping, last_change = state
+    return (x.copy(), v.copy(), kind.copy(), terrain.copy(), normal_floor.copy(),
+            friction_damping.copy(), last_change.copy())
+
+
+@kernel
+def copy_state(out, state):
+    """Copy the implicit step's ``state`` into ``out`` (one like it: saved_state), in place."""
+    copy_positions(out[0], state[0])
+    copy_positions(out[1], state[1])
+    copy_positions(out[6], state[6])
+    for i in range(state[2].shape[0]):
+        out[2][i] = state[2][i]
+        out[3][i] = state[3][i]
+        out[4][i] = state[4][i]
+        out[5][i] = state[5][i]
 
 
 @kernel
 def state_step(model, state, scratch, h, pairs):
     """One backward_euler_step of ``state`` with ``scratch`` (implicit_euler_step)."""
     x, v, kind, terrain, normal_floor, friction_damping, last_change = state
-    layout, newton_iterations, tolerance, max_iterations, work, statistics, _ = scratch
+    layout, newton_iterations, tolerance, max_iterations, work, statistics, _, _ = scratch
     return backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance,
                                max_iterations, work, kind, terrain, normal_floor,
                                friction_damping, last_change, statistics, pairs)
@@ -237,12 +259,13 @@ def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_ite
     (implicit.surface_contact.kept_surface_pairs), changed in place.
 
     kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
-    call) to the next, last_change the velocity change; statistics[0] and [1] count the
-    conjugate-gradient iterations and the linear solves."""
+    call) to the next, last_change the velocity change; statistics[0], [1] and [2] count the
+    conjugate-gradient iterations, the linear solves and the halvings (implicit_euler_step)."""
     state = (x, v, kind, terrain, normal_floor, friction_damping, last_change)
-    # the last entry: room for a step's start, which a step taken again in halves goes back to
+    # the last entries: room for a step's start and a part's, which a step taken again in
+    # halves goes back to (implicit_euler_step)
     scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x, kept),
-               statistics, saved_state(state))
+               statistics, saved_state(state), saved_state(state))
     return drive(implicit_euler_step, model, state, scratch, h, steps, pairs)
 
 
@@ -270,8 +293,8 @@ class ImplicitEuler(Integrator):
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
-        # running totals, for diagnostics: conjugate-gradient iterations, linear solves, steps
-        # taken again in halves (implicit/halving.py)
+        # running totals, for diagnostics: conjugate-gradient iterations, linear solves, times a
+        # step or a part of one was cut in half (implicit/halving.py)
         self.statistics = np.zeros(3, np.int64)
 
     def solve_pair_list(self, model, x):
