@@ -59,33 +59,29 @@ def carried_through(model, start, x, pairs, kept):
     (surface_contact.kept_surface_pairs) or, for a self-colliding body, of the post-step list
     ``pairs`` where it holds at x, else of one renewed there (only for the check: the step
     hands on its own list, so the post-step pass keeps or renews it as before)."""
-    if any_point_passed(model, start, x, kept[0][0]) or any_edge_passed(model, start, x,
-                                                                      kept[0][1]):
+    if any_passed(model, start, x, kept[0][0], True) or any_passed(model, start, x, kept[0][1],
+                                                                     False):
         return True
     if not any_self_collision(model):
         return False
     own = pairs_at(model, x, pairs)
-    return any_point_passed(model, start, x, own[0]) or any_edge_passed(model, start, x, own[1])
+    return any_passed(model, start, x, own[0], True) or any_passed(model, start, x, own[1], False)
 
 
 @kernel
-def any_point_passed(model, start, x, points):
-    """Whether a point-triangle pair of ``points`` passed through (point_passed_face)."""
-    corners = np.empty((4, 3))
-    for k in range(points.shape[0]):
-        if point_passed_face(model.surface_triangles, model.particle_body, model.body_thickness,
-                             start, x, points[k, 0], points[k, 1], corners):
-            return True
-    return False
-
-
-@kernel
-def any_edge_passed(model, start, x, edge_pairs):
-    """Whether an edge-edge pair of ``edge_pairs`` passed each other (edge_passed_edge)."""
-    ends = np.empty((4, 3))
-    for k in range(edge_pairs.shape[0]):
-        if edge_passed_edge(model.surface_edges, model.particle_body, model.body_thickness,
-                            start, x, edge_pairs[k, 0], edge_pairs[k, 1], ends):
+def any_passed(model, start, x, pairs, point_triangle):
+    """Whether a pair of ``pairs`` (point-triangle if ``point_triangle``, else edge-edge) passed
+    through during the step (point_passed_face, edge_passed_edge)."""
+    at = np.empty((4, 3))   # the work space of both
+    for k in range(pairs.shape[0]):
+        if point_triangle:
+            passed = point_passed_face(model.surface_triangles, model.particle_body,
+                                       model.body_thickness, start, x, pairs[k, 0], pairs[k, 1],
+                                       at)
+        else:
+            passed = edge_passed_edge(model.surface_edges, model.particle_body,
+                                      model.body_thickness, start, x, pairs[k, 0], pairs[k, 1], at)
+        if passed:
             return True
     return False
 

@@ -31,7 +31,6 @@ import numpy as np
 from .._jit import kernel
 from ..errors import require, SceneError
 from ..forces import force_columns, spring_forces
-from ..surface_collisions import pairs_at
 from ..implicit.ball_contact import (find_solve_contacts, linearize_contacts,
                                      newton_iterations_needed, update_active_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
