@@ -13,7 +13,7 @@ import time
 import numpy as np
 from numba import njit
 
-from springsim.implicit.ball_contact import no_ball_contacts
+from springsim.collision.contact_sets.solve import no_contacts
 from springsim.implicit.cg import filter_and_dot, search_product, system_multiply
 from springsim.implicit.jacobian import assemble_diagonal_and_terms
 from springsim.implicit.spring_terms import spring_terms_like

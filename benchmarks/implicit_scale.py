@@ -27,11 +27,13 @@ def measure(name, steps, dt=1 / 60, threads=None, skip=0):
     options = {} if threads is None else {"threads": threads}
     simulation = Simulation(scene, integrator="implicit_euler", dt=dt, **options)
     simulation.step(1 + skip)
-    before = simulation.integrator.statistics.copy()
+    statistics = simulation.integrator.statistics
+    before = statistics.cg_iterations[0], statistics.linear_solves[0]
     started = time.perf_counter()
     simulation.step(steps)
     seconds = time.perf_counter() - started
-    iterations, solves = (simulation.integrator.statistics - before)[:2]
+    iterations = statistics.cg_iterations[0] - before[0]
+    solves = statistics.linear_solves[0] - before[1]
     return {"row": name, "particles": simulation.model.particle_count,
             "ms_per_step": 1000 * seconds / steps, "cg_per_step": iterations / steps,
             "solves_per_step": solves / steps}

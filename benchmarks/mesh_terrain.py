@@ -27,7 +27,7 @@ import trimesh
 import springsim
 from springsim.bodies.cube import Cube
 from springsim.bodies.mesh import MeshBody
-from springsim.contact import apply_contact_forces
+from springsim.collision.response.terrain import apply_contact_forces
 from springsim.meshfiles import _read
 from springsim.model import build_model
 from springsim.scene import Scene

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 import springsim
-from springsim.broadphase import (brute_force_pairs, find_contacts, first_capacity, grid_pairs,
-                                  search_size)
+from springsim.collision.broad_phase.balls import (brute_force_pairs, find_contacts,
+                                                   first_capacity, grid_pairs, search_size)
 
 
 def numpy_pairs(x, radius, balls):

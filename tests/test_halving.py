@@ -6,7 +6,7 @@ turning past a parallel one at a distance does not)."""
 import numpy as np
 import pytest
 
-from springsim.implicit.halving import edge_passed_edge, point_passed_face
+from springsim.collision.ccd.crossing_check import edge_passed_edge, point_passed_face
 
 THICKNESS = np.array([0.02])        # one body: the rest distance is 0.02 m
 BODY = np.zeros(8, np.int64)

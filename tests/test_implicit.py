@@ -11,15 +11,17 @@ from conftest import EARTH_GRAVITY, build_cube_simulation, perturb
 from springsim import SceneError, Simulation
 from springsim.bodies.balls import Ball, Balls
 from springsim.bodies.cube import Cube
-from springsim.implicit.ball_contact import no_ball_contacts
+from springsim.collision.contact_sets.solve import no_contacts
 from springsim.implicit.cg import filtered_cg, search_product
 from springsim.implicit.constraints import CONTACT, FREE, PINNED, SLIP_SPEED
 from springsim.implicit.jacobian import assemble_diagonal_and_terms, assemble_system
 from springsim.implicit.pattern import build_block_pattern, build_solve_layout
 from springsim.implicit.spring_terms import spring_terms_like
+from springsim.collision.pair_lists import no_pair_list
+from springsim.collision.pair_lists.solve_pairs import kept_surface_pairs
 from springsim.integrators import get_integrator
-from springsim.integrators import NO_PAIRS
-from springsim.integrators.implicit_euler import backward_euler_step, workspace
+from springsim.integrators.implicit_euler import (ImplicitState, Scratch, Settings, Statistics,
+                                                  backward_euler_step, saved_state, workspace)
 from springsim.presets import preset
 from springsim.reference import reference_forces
 from springsim.scene import Scene
@@ -358,16 +360,15 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
     scene = Scene(name="throw", bodies=[cube], terrains=[terrain], gravity=EARTH_GRAVITY)
     simulation = Simulation(scene, integrator="implicit_euler", dt=H)
     arrays = simulation.model.arrays
-    pattern = simulation.integrator.pattern(simulation.model)
-    contacts = simulation.state.contacts
-    work = workspace(pattern, simulation.positions,
-                     simulation.integrator.solve_pair_list(simulation.model, simulation.positions))
-    statistics = np.zeros(2, np.int64)
-    no_pairs = NO_PAIRS   # no self-colliding surface: no pair of one body for the solve
+    layout = simulation.integrator.pattern(simulation.model)
+    state = ImplicitState(simulation.positions, simulation.velocities, simulation.state.contacts)
+    scratch = Scratch(layout, Settings(1, 1e-8, 1000), workspace(layout, simulation.positions),
+                      kept_surface_pairs(simulation.positions), Statistics.zeros(),
+                      saved_state(state), saved_state(state))
+    no_pairs = no_pair_list()   # no self-colliding surface: no pair of one body for the solve
     touched = False
     for _ in range(12):
-        backward_euler_step(arrays, pattern, simulation.positions, simulation.velocities, H, 1,
-                            1e-8, 1000, work, *contacts, statistics, no_pairs)
+        backward_euler_step(arrays, state, scratch, H, no_pairs)
         depth = -terrain.signed_distance(simulation.positions).min()
         assert depth <= 1e-9
         touched |= depth > -0.01
@@ -546,9 +547,9 @@ def test_the_first_guess_changes_the_solves_work_not_their_answer():
     iterations = []
     for state in (guessed, unguessed):
         simulation.state = state
-        simulation.integrator.statistics[:] = 0
+        simulation.integrator.statistics.cg_iterations[:] = 0
         simulation.step(1)
-        iterations.append(int(simulation.integrator.statistics[0]))
+        iterations.append(int(simulation.integrator.statistics.cg_iterations[0]))
     scale = np.abs(unguessed.velocities).max()
     assert np.abs(guessed.velocities - unguessed.velocities).max() <= 1e-7 * scale
     assert np.abs(guessed.positions - unguessed.positions).max() <= 1e-7 * scale / 60.0

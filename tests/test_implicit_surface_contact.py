@@ -179,7 +179,7 @@ def test_a_heavy_cube_dropped_fast_onto_a_folded_cloth_never_pushes_it_through_i
     """A 128 kg cube at 5 m/s presses harder than the solve's penalty contacts hold within one
     step: with them alone the cloth crossed itself in each of these runs (1246, 1479, 3 and 807
     crossings). A step that carries a point through a triangle or an edge past an edge is
-    taken again in halves (implicit/halving.py): no edge of the cloth ever crosses one of its
+    taken again in halves (integrators/implicit_euler.implicit_euler_step): no edge of the cloth ever crosses one of its
     triangles or one of the cube's, and some steps were halved."""
     simulation = cube_onto_folded_cloth(dt, 5.0, shift=shift)
     triangles = simulation.model.arrays.surface_triangles
@@ -189,20 +189,20 @@ def test_a_heavy_cube_dropped_fast_onto_a_folded_cloth_never_pushes_it_through_i
         assert count_crossings(simulation.positions, triangles[of_cloth]) == 0, simulation.time
         assert len(crossing_pairs(simulation.positions, triangles[of_cloth],
                                   triangles[~of_cloth])) == 0, simulation.time
-    assert simulation.integrator.statistics[2] > 0
+    assert simulation.integrator.statistics.halvings[0] > 0
 
 
 def test_a_step_taken_in_halves_is_the_same_one_step_a_call_and_resumed():
-    """The halving lives inside a step (implicit/halving.py): the heavy drop stepped one step a
+    """The halving lives inside a step (integrators/implicit_euler.implicit_euler_step): the heavy drop stepped one step a
     call ends bit for bit where one call of 8 steps ends, and a fresh Simulation given the state
     just before a halved step takes that step as the run did."""
     dt = 1.0 / 30.0
     run = cube_onto_folded_cloth(dt, 5.0, shift=0.015)
     resumed = False
     for _ in range(8):
-        halvings, before = run.integrator.statistics[2], run.state.copy()
+        halvings, before = run.integrator.statistics.halvings[0], run.state.copy()
         run.step(1)
-        if run.integrator.statistics[2] > halvings and not resumed:
+        if run.integrator.statistics.halvings[0] > halvings and not resumed:
             fresh = cube_onto_folded_cloth(dt, 5.0, shift=0.015)
             fresh.state = before
             fresh.step(1)

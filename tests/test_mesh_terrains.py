@@ -168,7 +168,7 @@ def test_contact_looked_up_a_block_ahead_is_the_planes(folder):
     (contact.py): on a flat mesh floor every particle, in every block (1000 particles: the last
     block partial), gets the plane's reaction and friction to round-off, pinned ones none, with a
     second terrain after it in the list."""
-    from springsim.contact import apply_contact_forces
+    from springsim.collision.response.terrain import apply_contact_forces
     from springsim.model import build_model
     from springsim.terrains import Plane
 

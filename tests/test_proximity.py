@@ -12,7 +12,7 @@ import pytest
 
 from springsim.bodies.cloth import Cloth
 from springsim.bodies.cube import Cube
-from springsim.proximity import surface_pairs
+from springsim.collision.broad_phase.surfaces import surface_pairs
 from springsim.scene import Scene
 from springsim.simulation import Simulation
 

@@ -10,11 +10,11 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from springsim.bodies.cloth import Cloth
-from springsim.proximity import surface_pairs
-from springsim.rigid_pieces import moved_rigidly
+from springsim.collision.broad_phase.surfaces import surface_pairs
+from springsim.collision.pair_lists.rigid_pieces import moved_rigidly
 from springsim.scene import Scene
 from springsim.simulation import Simulation
-from springsim.surface_collisions import list_holds, surface_skin
+from springsim.collision.pair_lists.keeping import list_holds, surface_skin
 
 N = 30   # particles along each edge of the 4 m test cloth: spacing 0.14 m
 

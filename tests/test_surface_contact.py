@@ -305,7 +305,7 @@ def test_contact_is_bit_identical_for_one_and_two_threads():
 
 @pytest.mark.parametrize("integrator", ["rk4", "implicit_euler"])
 def test_one_step_a_call_is_bit_identical_to_one_call_and_keeps_the_pair_list(integrator):
-    """The pair list lives on between calls (Integrator.pair_list), so stepping one step a
+    """The pair list lives on between calls (in the state: State.pairs), so stepping one step a
     call searches no more than one call does; the list decides nothing, so the trajectory is
     the same to the bit. Then a state far from the list's (the start again) is searched
     afresh, and again gives the same trajectory."""
@@ -318,14 +318,14 @@ def test_one_step_a_call_is_bit_identical_to_one_call_and_keeps_the_pair_list(in
     searched_at = set()
     for _ in range(steps):
         single.step(1)
-        searched_at.add(id(single.integrator.pair_list(single.model)[2]))
+        searched_at.add(id(single.state.pairs.found_at))
     assert np.array_equal(single.positions, whole.positions)
     assert np.array_equal(single.velocities, whole.velocities)
     assert len(searched_at) < steps / 10   # the list was kept between most calls
-    kept = single.integrator.pair_list(single.model)
+    kept = single.state.pairs
     single.state = start
     single.step(steps)
-    assert single.integrator.pair_list(single.model)[2] is not kept[2]   # searched again
+    assert single.state.pairs.found_at is not kept.found_at   # searched again
     assert np.array_equal(single.positions, whole.positions)
 
 
@@ -338,8 +338,8 @@ def test_a_flat_default_cloth_lists_no_pair_of_its_own(particles_per_edge):
     triangle it does not share an edge with, measured with plain NumPy over every (point,
     triangle) pair; and the pair search lists none, so a cloth where nothing touches costs no
     narrow phase. The thickness is below half the spacing, as self-collision requires."""
-    from springsim.proximity import surface_pairs
-    from springsim.surface_collisions import start_surface_pairs, surface_skin
+    from springsim.collision.broad_phase.surfaces import surface_pairs
+    from springsim.collision.pair_lists.keeping import start_surface_pairs, surface_skin
     cloth = Cloth(particles_per_edge=particles_per_edge)
     simulation = Simulation(Scene(bodies=[cloth], terrains=[], dt=1e-3))
     arrays, x = simulation.model.arrays, simulation.positions

@@ -14,11 +14,11 @@ from scipy.spatial.transform import Rotation
 
 from springsim.bodies.cloth import Cloth
 from springsim.bodies.cube import Cube
-from springsim.proximity import surface_pairs
+from springsim.collision.broad_phase.surfaces import surface_pairs
 from springsim.scene import Scene
 from springsim.simulation import Simulation
-from springsim.surface_collisions import sheet_lies_unfolded, surface_skin
-from springsim.unfolded_sheet import edges_meet, is_disk, no_sheet
+from springsim.collision.pair_lists.keeping import sheet_lies_unfolded, surface_skin
+from springsim.collision.pair_lists.unfolded_sheet import edges_meet, is_disk, no_sheet
 
 N = 20   # particles along each edge of the 2 m test cloth: spacing 0.105 m
 
@@ -142,8 +142,8 @@ def test_a_list_proven_within_the_thickness_alone_serves_its_step_and_is_never_k
     holds for that step alone. Pinched further, with pairs within the thickness now, the next
     step does not keep it (neither by the spread nor by the rigid check, though the motion is
     small) and renews it with exactly the search's pairs."""
-    from springsim.surface_collisions import (list_holds, renewed_surface_pairs,
-                                              start_surface_pairs)
+    from springsim.collision.pair_lists.keeping import (list_holds, renewed_surface_pairs,
+                                                        start_surface_pairs)
     arrays, flat = cloth
 
     def pinched(depth):

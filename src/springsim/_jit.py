@@ -5,9 +5,8 @@ kernel was compiled in this process or loaded from the cache. LLVM's fast-math f
 (reassoc, contract) let it reorder sums and fuse multiply-adds differently in each compilation
 context: a backward-Euler step compiled in the process differed from the cached one by 3e-17 m,
 and a chaotic run (a cube pressing a folded cloth) ended 0.5 m apart after 8 steps
-(tests/test_cache.py). Without them, 2026-11-25, alternating runs: rk4's jelly cube and
-cloth-drape within 1%, cloth-balls about 2%, three stacked cubes 6% and backward Euler on the
-jelly cube 10-12% slower. ``error_model="numpy"`` lets a division by zero give inf or NaN (which
+(tests/test_cache.py). What strict arithmetic costs is on the documentation's performance
+page. ``error_model="numpy"`` lets a division by zero give inf or NaN (which
 the divergence check reports) instead of a branch and an exception in every inner loop.
 
 Numba invalidates a cached kernel only when the kernel's own file changes, not when a kernel it
@@ -132,7 +131,7 @@ def inline_kernel(function):
     """A small kernel inlined into the kernels that call it (in Numba's IR, before compiling).
 
     For helpers called once per particle or spring with an array argument: a call between
-    kernels passes each array with a reference count up and down, about 35 ns, which can be a
+    kernels passes each array with a reference count up and down, which can be a
     hundred times the helper's own work. Helpers that take and return scalars need not be
     inlined this way: the compiler inlines them itself."""
     return njit(inline="always", cache=True, fastmath=FASTMATH,

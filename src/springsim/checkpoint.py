@@ -2,7 +2,7 @@
 never stopped.
 
 A state file (``Simulation.save_state``) holds the whole State: positions, velocities, time, the
-steps taken and implicit_euler's contact memory. A checkpoint (``springsim run
+steps taken, implicit_euler's contact memory and the surface pair lists. A checkpoint (``springsim run
 --checkpoint-every``) holds, besides the state, everything the rest of the run depends on: the
 run's arguments, its scene written out as a scene file (so a later edit of the scene file cannot
 change a resumed run) and the frames recorded so far. Both are NPZ files written whole or not at
@@ -20,7 +20,8 @@ import numpy as np
 
 from .errors import SceneError, require
 from .scene import Scene
-from .state import ContactMemory, State
+from .collision.pair_lists import PairList
+from .state import ContactMemory, State, solve_pair_list
 
 STATE_FORMAT = "springsim-state"
 CHECKPOINT_FORMAT = "springsim-checkpoint"
@@ -40,7 +41,26 @@ def state_arrays(state: State, prefix: str = "") -> dict:
               "time": np.float64(state.time), "steps": np.int64(state.steps)}
     arrays.update({f"contacts.{name}": array
                    for name, array in zip(ContactMemory._fields, state.contacts)})
+    arrays.update({f"pairs.{name}": array for name, array in zip(PairList._fields, state.pairs)})
+    if state.solve_pairs is not None:
+        kept = state.solve_pairs
+        arrays.update({"solve_pairs.points": kept.pairs[0], "solve_pairs.edges": kept.pairs[1],
+                       "solve_pairs.found_at": kept.found_at, "solve_pairs.reach": kept.reach})
     return {prefix + name: np.asarray(value) for name, value in arrays.items()}
+
+
+def pair_lists_from_arrays(arrays: dict, prefix: str):
+    """The state's pair lists in ``arrays`` (a file from before they were saved has none: the
+    first step then finds them, as a fresh run does)."""
+    pairs = None
+    if all(f"{prefix}pairs.{name}" in arrays for name in PairList._fields):
+        pairs = PairList(*(np.asarray(arrays[f"{prefix}pairs.{name}"]).copy()
+                           for name in PairList._fields))
+    solve_pairs = None
+    names = ("points", "edges", "found_at", "reach")
+    if all(f"{prefix}solve_pairs.{name}" in arrays for name in names):
+        solve_pairs = solve_pair_list(*(arrays[f"{prefix}solve_pairs.{name}"] for name in names))
+    return pairs, solve_pairs
 
 
 def state_from_arrays(arrays: dict, particle_count: int, key: str, path,
@@ -52,7 +72,7 @@ def state_from_arrays(arrays: dict, particle_count: int, key: str, path,
                       float(arrays[prefix + "time"]),
                       ContactMemory(*(arrays[f"{prefix}contacts.{name}"].copy()
                                       for name in ContactMemory._fields)),
-                      int(arrays[prefix + "steps"]))
+                      int(arrays[prefix + "steps"]), *pair_lists_from_arrays(arrays, prefix))
     except (KeyError, TypeError, ValueError) as error:
         raise SceneError(key, str(path), f"holds no complete state ({error})") from None
     count = len(positions) if positions.ndim else 0

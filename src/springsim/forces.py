@@ -10,7 +10,7 @@ import numpy as np
 from numba import prange
 
 from ._jit import inline_kernel, kernel
-from .contact import apply_contact_forces
+from .collision.response.terrain import apply_contact_forces
 from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
 from .springs import spring_force_factor
 
@@ -56,7 +56,7 @@ def add_loose_spring_forces(model, x, v, force):
 def accelerations(model, x, v, h, out, columns):
     """out = dv/dt at (x, v): internal and external forces over mass, then terrain contact.
 
-    ``h`` is the step the integrator is taking; static friction uses it (see contact.py).
+    ``h`` is the step the integrator is taking; static friction uses it (see collision/response/terrain.py).
     ``columns`` is work space from force_columns. Pinned particles have zero inverse mass and so
     zero acceleration.
     """

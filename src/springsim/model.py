@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .bodies.balls import collision_parameters
-from .contact_shapes import surface_contact_arrays
+from .collision.shapes.surfaces import surface_contact_arrays
 from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
@@ -37,7 +37,7 @@ class ModelArrays(NamedTuple):
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
-    # Ball contacts (surface_collisions.py). A ball is a particle with radius > 0 (only Balls
+    # Ball contacts (collision/pipeline.py). A ball is a particle with radius > 0 (only Balls
     # bodies give radii); every other particle is a point.
     balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
     ball_slot: np.ndarray = np.empty(0, np.int64)             # (P,) row in the ball tables, or -1
@@ -46,11 +46,11 @@ class ModelArrays(NamedTuple):
     particle_friction: np.ndarray = np.empty(0)               # (B,) ball-particle Coulomb friction
     position_correction: np.ndarray = np.empty(0)             # (B,) share of a penetration removed
     # Sheets (bodies that are all surface: cloth): their triangles, which balls touch as surfaces
-    # in implicit_euler's solve (implicit/ball_contact.py), and each particle's triangles
+    # in implicit_euler's solve (collision/response/penalty.py), and each particle's triangles
     sheet_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T, 3) particle numbers
     triangle_start: np.ndarray = np.zeros(1, np.int64)        # (P + 1,) into particle_triangles
     particle_triangles: np.ndarray = np.empty(0, np.int64)    # (3T,) rows of sheet_triangles
-    # Body-body contact of surfaces (contact_shapes.py, surface_collisions.py); empty when no
+    # Body-body contact of surfaces (collision/shapes/surfaces.py, collision/pipeline.py); empty when no
     # two surfaces can touch
     particle_body: np.ndarray = np.empty(0, np.int64)         # (P,) the body of each particle
     surface_points: np.ndarray = np.empty(0, np.int64)        # (Q,) particles on a surface
@@ -63,7 +63,7 @@ class ModelArrays(NamedTuple):
     body_friction: np.ndarray = np.empty(0)                   # (B,) kinetic Coulomb coefficient
     body_static_friction: np.ndarray = np.empty(0)            # (B,)
     body_restitution: np.ndarray = np.empty(0)                # (B,)
-    # One self-colliding sheet (unfolded_sheet.py; empty otherwise): each particle's ring edges,
+    # One self-colliding sheet (collision/pair_lists/unfolded_sheet.py; empty otherwise): each particle's ring edges,
     # the boundary edges, the particles near them
     sheet_ring_start: np.ndarray = np.zeros(1, np.int64)      # (P + 1,) into sheet_ring_edges
     sheet_ring_edges: np.ndarray = np.empty((0, 2), np.int32)  # (R, 2) particle numbers

@@ -64,7 +64,7 @@ def jelly_torus() -> Scene:
 
 def jelly_stack() -> Scene:
     """Three default jelly cubes dropped onto each other on the plane, each a little off the
-    one below: they land, squash and pile up (surface contact, surface_collisions.py)."""
+    one below: they land, squash and pile up (surface contact, collision/pipeline.py)."""
     cubes = [Cube(position=(0.0, 1.3, 0.0)), Cube(position=(0.3, 6.0, 0.2)),
              Cube(position=(-0.2, 10.7, -0.3))]
     return Scene(name="jelly-stack", bodies=cubes, terrains=[Plane()], duration=6.0)

@@ -23,11 +23,11 @@ concurrent.futures:
   code that runs on Slurm, PBS, SSH or Kubernetes (any deployment that gives a scheduler address).
   joblib's dask backend would be one more layer over the same client and gives none of the above.
 
-Starting a local cluster costs about half a second: its worker processes are forked from a
+Starting a local cluster is quick: its worker processes are forked from a
 fork server that has imported springsim, NumPy, Numba and distributed once (``forkserver``
 with a preload, where the platform has it), where Dask's default (``spawn``) makes every worker
-import them from scratch, about two seconds on two cores (benchmarks/sweep_scaling.py measures
-it as the "fixed cost"). A fork server starts from a clean, single-threaded process, unlike
+import them from scratch, several times longer (benchmarks/sweep_scaling.py measures it as the
+"fixed cost"). A fork server starts from a clean, single-threaded process, unlike
 ``fork`` of the parent (whose client threads a fork would copy mid-flight), and its workers load
 the compiled kernels from the disk cache as a remote Dask worker does, so local and cluster
 results stay the same bit for bit. Workers have one thread each: the runs are CPU-bound compiled

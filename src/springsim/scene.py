@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .bodies.surface_contact import SurfaceContact
+from .collision.shapes.settings import SurfaceContact
 from .errors import is_finite, require
 from .sampling import check_duration
 from .sizes import check_scene_size

@@ -105,7 +105,7 @@ class Simulation:
                 f"must be a whole number of steps from 0 to 2^53 = {MAX_STEPS}")
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
-        self.state.check(self.model.particle_count)
+        self.state.check(self.model.particle_count, self.surface_shapes())
         done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
                                                  self.threads)
         self.state.time += done * self.dt
@@ -118,6 +118,11 @@ class Simulation:
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
                 dt=self.dt, particle=particle, position=self.state.positions[particle],
                 speed_squared=speed_squared)
+
+    def surface_shapes(self) -> tuple[int, int]:
+        """How many surface triangles and edges the model has (the pair lists number them)."""
+        arrays = self.model.arrays
+        return len(arrays.surface_triangles), len(arrays.surface_edges)
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more (rounded to whole steps)."""
@@ -141,13 +146,15 @@ class Simulation:
         return energies(self.model, self.state)
 
     def reset(self) -> None:
-        """Back to the initial state (its contact memory included), with a fresh integrator."""
+        """Back to the initial state (its contact memory and pair lists included), with a fresh
+        integrator."""
         self.state = State.initial(self.model)
         self.integrator = get_integrator(self.scene.integrator, **self._integrator_options)
 
     def save_state(self, path) -> None:
-        """Write the state (positions, velocities, time, steps, contact memory) to the NPZ file
-        ``path``, whole or not at all; ``load_state`` continues the run from it bit for bit."""
+        """Write the state (positions, velocities, time, steps, contact memory, pair lists) to the
+        NPZ file ``path``, whole or not at all; ``load_state`` continues the run from it bit for
+        bit."""
         from .checkpoint import save_state
 
         self.state.check(self.model.particle_count)

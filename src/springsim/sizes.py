@@ -4,9 +4,8 @@ A scene that asks for more than the machine holds (``particles_per_edge = 2000``
 particles) is refused with one line before a single array is allocated. Each body kind says its
 own counts (``counts()`` on the body spec: particles and springs, from its parameters alone); a
 kind that does not is left out of the estimate. The bytes per particle and per spring bound the
-measured peak of building and stepping a 40^3 cube (``benchmarks/model_memory.py``: 128 to 132
-MB for the explicit integrators, 348 MB for implicit_euler with its Jacobian blocks, against an
-estimate of 453 MB).
+measured peak of building and stepping a cube from above (``benchmarks/model_memory.py``
+prints both, for every integrator).
 """
 import os
 

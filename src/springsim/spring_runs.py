@@ -5,9 +5,8 @@ numbers: in a cube of N per edge, particle p is joined to p + 1, p + N, p + N^2,
 A *run* is a stretch of one family with one parameter group, the springs
     (first + i, first + i + offset),   i = 0 .. count - 1.
 Along a run both ends of the springs walk two contiguous stretches of memory, so the force loop
-needs no gather or scatter and the compiler vectorizes it (benchmarks/spring_loop.py: on the 10^3
-cube, all 12,876 springs in 44 us per evaluation against 96 us for the plain loop, the copies to
-and from columns included). A place in a run
+needs no gather or scatter and the compiler vectorizes it (benchmarks/spring_loop.py times it
+against the plain loop, the copies to and from columns included). A place in a run
 with no spring, such as the end of a lattice row, is a *hole*: it has a negative rest length and
 gives no force. Springs that fit in no run stay in a plain list (``loose_springs``).
 

@@ -1,9 +1,10 @@
 """The state: what changes while simulating. Small, copyable, and all an integrator advances.
 
-Besides positions, velocities and time it carries the contact memory that backward Euler keeps
-from one step to the next (which particles were held by which terrain, their velocity floors and
-friction), as MuJoCo keeps its warm start in mjData: so a copied or saved state continues a run
-bit for bit, whatever the integrator.
+Besides positions, velocities and time it carries what a step reads of the steps before it, as
+MuJoCo keeps its warm start in mjData: the contact memory that backward Euler keeps from one
+step to the next (which particles were held by which terrain, their velocity floors and
+friction) and the surface pair lists (collision/pair_lists/), whose age decides whether a list is
+kept or renewed. So a copied or saved state continues a run bit for bit, whatever the integrator.
 """
 import math
 from dataclasses import dataclass, field
@@ -11,6 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .collision.pair_lists import PairList, SolvePairList, no_pair_list
 from .errors import SceneError
 
 
@@ -44,10 +46,15 @@ class State:
     time: float = 0.0       # s
     contacts: ContactMemory = field(default=None)
     steps: int = 0          # steps taken to reach this state
+    pairs: PairList = field(default=None)   # the post-step pass's surface pair list
+    # backward Euler's list of surface pairs of two bodies (None until its first step)
+    solve_pairs: SolvePairList | None = None
 
     def __post_init__(self):
         if self.contacts is None:
             self.contacts = ContactMemory.empty(len(self.positions))
+        if self.pairs is None:
+            self.pairs = no_pair_list()
 
     @classmethod
     def initial(cls, model) -> "State":
@@ -55,13 +62,17 @@ class State:
 
     def copy(self) -> "State":
         return State(self.positions.copy(), self.velocities.copy(), self.time,
-                     self.contacts.copy(), self.steps)
+                     self.contacts.copy(), self.steps, copy_pair_list(self.pairs),
+                     copy_solve_pairs(self.solve_pairs))
 
-    def check(self, particle_count: int) -> None:
+    def check(self, particle_count: int, shapes: tuple[int, int] | None = None) -> None:
         """Raise a SceneError unless every array is what the compiled kernels assume: the
         model's shape and dtype, C-contiguous and writeable. A kernel trusts its arrays' sizes,
         so a replaced ``positions`` of another shape would be written past its end.
-        Cheap (attribute checks only): it runs before every compiled call."""
+        ``shapes``: how many surface triangles and edges the model has, which the pair lists
+        number (None: their numbers are not checked).
+        Cheap (attribute checks, and a pass over the pair lists): it runs before every compiled
+        call."""
         wanted = [("positions", self.positions, (particle_count, 3), np.float64),
                   ("velocities", self.velocities, (particle_count, 3), np.float64)]
         contacts = self.contacts
@@ -78,10 +89,59 @@ class State:
                 raise SceneError(f"state.{name}", _Summary(array),
                                  f"must be a writeable C-contiguous {np.dtype(dtype)} array of "
                                  f"shape {shape}: the model has {particle_count} particles")
+        self.check_pairs(particle_count, shapes)
         if not (isinstance(self.time, (int, float, np.number)) and math.isfinite(self.time)):
             raise SceneError("state.time", self.time, "must be a finite number of seconds")
         if not (isinstance(self.steps, (int, np.integer)) and self.steps >= 0):
             raise SceneError("state.steps", self.steps, "must be a whole number >= 0")
+
+    def check_pairs(self, particle_count: int, shapes: tuple[int, int] | None) -> None:
+        """The pair lists' arrays as the kernels read them, their rows within the model's."""
+        pairs = self.pairs
+        if not isinstance(pairs, PairList):
+            raise SceneError("state.pairs", type(pairs).__name__,
+                             "must be a collision.pair_lists.PairList")
+        triangles, edges = shapes if shapes is not None else (None, None)
+        rows = [("points", pairs.points, (2,), np.int64, (particle_count, triangles)),
+                ("edges", pairs.edges, (2,), np.int64, (edges, edges)),
+                ("found_at", pairs.found_at, (3,), np.float64, None),
+                ("age", pairs.age, (), np.int64, None)]
+        for name, array, columns, dtype, limits in rows:
+            if not (isinstance(array, np.ndarray) and array.shape[1:] == columns
+                    and array.dtype == dtype and array.flags.c_contiguous
+                    and array.flags.writeable):
+                raise SceneError(f"state.pairs.{name}", _Summary(array),
+                                 f"must be a writeable C-contiguous {np.dtype(dtype)} array of "
+                                 f"shape (N,) + {columns}")
+            if shapes is not None and limits is not None and array.size and not (
+                    array.min() >= 0 and array[:, 0].max() < limits[0]
+                    and array[:, 1].max() < limits[1]):
+                raise SceneError(f"state.pairs.{name}", _Summary(array),
+                                 "must number particles, triangles and edges of this model")
+        if pairs.age.shape != (1,) or pairs.found_at.shape[0] not in (0, particle_count):
+            raise SceneError("state.pairs", "a list of another model",
+                             f"must be found for this model's {particle_count} particles")
+
+
+def copy_pair_list(pairs: PairList) -> PairList:
+    return PairList(*(array.copy() for array in pairs))
+
+
+def copy_solve_pairs(kept: SolvePairList | None) -> SolvePairList | None:
+    if kept is None:
+        return None
+    return solve_pair_list(kept.pairs[0], kept.pairs[1], kept.found_at, kept.reach)
+
+
+def solve_pair_list(points, edges, found_at, reach) -> SolvePairList:
+    """A SolvePairList of copies of these arrays (its pairs in a typed list, which the solve
+    replaces in place)."""
+    from numba.typed import List
+
+    pairs = List()
+    pairs.append(np.array(points, np.int64).reshape(-1, 2))
+    pairs.append(np.array(edges, np.int64).reshape(-1, 2))
+    return SolvePairList(pairs, np.array(found_at, np.float64), np.array(reach, np.float64))
 
 
 class _Summary:

@@ -25,7 +25,7 @@ class BuiltBody:
     # (n,) m: how far the body's surface reaches beyond each particle, kept clear of terrains
     # (mesh bodies; None: the contact radius, zero for points)
     terrain_offsets: np.ndarray | None = None
-    # (c, 3) triangles of particle numbers that other bodies touch (contact_shapes.py; None: the
+    # (c, 3) triangles of particle numbers that other bodies touch (collision/shapes/surfaces.py; None: the
     # surface, when it is not embedded)
     collision_surface: np.ndarray | None = None
 

@@ -3,7 +3,7 @@
 A ball has no rotation (the reference has none), so the integrators advance it like any particle,
 and terrain contact already accounts for its radius. Balls collide with each other and with every
 other particle (cloth and cube particles are points); the body-body contact pass
-(surface_collisions.py) resolves those contacts once per step with the parameters held here.
+(collision/pipeline.py) resolves those contacts once per step with the parameters held here.
 Defaults are the reference's scene 2: four balls of radius 0.5 m and mass 125 kg (density
 1000 r^3) at (+-0.75, 1, +-0.75), at rest; ball-ball restitution 0.8, ball-particle restitution
 0.0 and friction 0.03, position correction 0.15 of the penetration, viscous drag 3.4e-4 N s/m.

@@ -19,7 +19,7 @@ from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
 from .cube import grid_triangles
-from .surface_contact import SurfaceContact
+from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((0, 1), (1, 0))
 SHEAR_OFFSETS = ((1, 1), (1, -1))
@@ -100,7 +100,7 @@ class Cloth(SurfaceContact):
     def default_thickness(self) -> float:
         """2 cm, or a quarter of the particle spacing where that is less. Why: a self-colliding
         cloth's contacts reach its thickness and its pair search twice that beyond (SKIN in
-        surface_collisions.py); kept under the spacing, a flat cloth lists no pair of its own
+        collision/pipeline.py); kept under the spacing, a flat cloth lists no pair of its own
         (a 100 x 100, 4 m cloth at 2 cm listed 200,000 and searched 7 times longer)."""
         return min(0.02, 0.25 * self.surface_spacing())
 

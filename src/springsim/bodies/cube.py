@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
-from .surface_contact import SurfaceContact
+from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
 BEND_OFFSETS = ((2, 0, 0), (0, 2, 0), (0, 0, 2))

@@ -19,7 +19,7 @@ the cube's springs, with the mesh's own surface riding the lattice.
   ball keeps its radius: every vertex lies within that distance of a particle that stays that far
   from the terrain, so no vertex of a body at rest goes below it. Where the surface passes
   through the particles (a box), the offsets are zero.
-  Other bodies (body-body contact, contact_shapes.py) touch a mesh body through the boundary
+  Other bodies (body-body contact, collision/shapes/surfaces.py) touch a mesh body through the boundary
   faces of its lattice, kept ``thickness`` apart as any surface: the faces of full cells whose
   neighbour across the face is not full, two triangles each (``collision_surface``,
   lattice_boundary). That boundary lies within about a spacing inside the drawn surface (on it
@@ -40,7 +40,7 @@ from ..meshfiles import check_closed, placed, read_mesh, validate_placement
 from ..surfaces import Embedding
 from . import BuiltBody
 from .cube import LatticeSprings, lattice_pattern, spring_parameters
-from .surface_contact import SurfaceContact
+from ..collision.shapes.settings import SurfaceContact
 
 INSIDE_TOLERANCE = 1e-6   # of the spacing: a lattice point this close to the surface is inside
 # memory per lattice point of the bounding box while testing it (positions, distances, closest

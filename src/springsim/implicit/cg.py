@@ -18,7 +18,7 @@ solve starts at its answer (a held contact, whose friction damper cancels the lo
 surface). The integrator also restores the constrained components after each solve
 (``constraints.hold_all_constrained``).
 
-Ball-particle contacts (ball_contact.py) are not in the fixed block pattern: ``system_multiply``
+Ball-particle contacts (penalty.py) are not in the fixed block pattern: ``system_multiply``
 adds their product to the assembled matrix's, and the Jacobi preconditioner their diagonal.
 ``filtered_cg`` is the solve without them.
 
@@ -36,7 +36,8 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from .ball_contact import add_contact_blocks, add_contact_product, no_contacts
+from ..collision.response.penalty import add_contact_blocks, add_contact_product
+from ..collision.contact_sets.solve import no_contacts
 from .constraints import filter_constrained, filtered
 from .jacobian import block_multiply
 from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
@@ -105,7 +106,7 @@ def contact_cg(pattern, blocks, terms, contacts, b, kind, normal, u, tolerance, 
                reference_norm, r, s, c, q):
     """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass), A the
     stored blocks plus the springs' ``terms`` (spring_terms.py) and the active ``contacts``
-    (ball_contact.py).
+    (penalty.py).
 
     The reference is ``reference_norm`` if positive, else the larger of the starting residual
     |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. r, s, c, q are work arrays
@@ -189,8 +190,8 @@ def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, 
     smooth load (gravity on a falling body: every particle's velocity changes by h g) takes
     conjugate gradients as many iterations as the load takes to cross the body, one neighbour
     per iteration. M^-1 r is the velocity change the load gives when the springs do not resist
-    it, exact for a uniform one: a falling 30^3 cube's solve needs 2 iterations after it
-    instead of 27 (benchmarks/implicit_scale.py).
+    it, exact for a uniform one: a falling cube's solve needs a few iterations after it instead
+    of as many as the cube is wide (benchmarks/implicit_scale.py counts them).
     Why a guess (the last step's velocity change): under a steady load consecutive steps change
     the velocities alike. Taken as a direction with its best length, not as the start itself, it
     is never worse than none: a resting cube's last change is round-off, which as a start cost

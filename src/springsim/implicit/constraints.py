@@ -4,7 +4,7 @@ Baraff and Witkin (1998, section 5) enforce constraints inside the linear solve:
 S_i = I (free), I - n n^T (normal fixed) or 0 (all fixed) removes the constrained components from
 every conjugate-gradient direction, so the solve keeps them at the values it starts from.
 
-Contact, as contact.py does it but for a whole implicit step:
+Contact, as collision/response/terrain.py does it but for a whole implicit step:
 - A particle is in contact with a terrain when it is in the contact band (phi < epsilon) or will
   be by the end of the step at its current velocity (phi + h v_n < epsilon). The second case is
   what keeps large steps honest: a particle falling 0.4 m per step would otherwise be driven deep
@@ -12,7 +12,7 @@ Contact, as contact.py does it but for a whole implicit step:
 - A contact's normal velocity at the end of the step is held at a floor v'_n = bound:
   outside the band, bound = -phi/h: it may end the step on the surface, not beyond;
   in the band, bound = max(min(v_n, 0), -phi/h): the terrain cancels the forces that would push
-  the particle in (as contact.py does), stops it at the surface, and lets a leaving particle slow
+  the particle in (as collision/response/terrain.py does), stops it at the surface, and lets a leaving particle slow
   down but not turn back into the terrain. The solve therefore never moves a particle into a
   terrain.
 - Coulomb friction is part of the solve, so that the springs feel it in the same step (applied
@@ -152,7 +152,7 @@ def filter_constrained(kind, normal, u):
 def filtered(kind, n0, n1, n2, u0, u1, u2):
     """S_i u_i for one particle of the given kind and normal. Scalars in and out: a kernel
     called per particle with arrays as arguments costs a reference count up and down per array
-    (about 35 ns, a hundred times the work of filtering a free particle)."""
+    (about a hundred times the work of filtering a free particle)."""
     if kind == FREE:
         return u0, u1, u2
     if kind == PINNED:

@@ -1,32 +1,44 @@
 """What every integrator shares: the one driver loop, and the small kernels of a step.
 
 Each method is a step function ``step(model, state, scratch, h, pairs)`` that advances ``state``
-(a tuple whose first two entries are the positions x and velocities v, changed in place) by one
-step h, using the work arrays in ``scratch``; ``pairs`` is the body-body pair list at the step's
-start (every surface pair within contact there: surface_collisions.py), which the explicit
+(a NamedTuple whose first fields are the positions x and velocities v, changed in place: Motion
+for the explicit methods) by one step h, using the work arrays in ``scratch``; ``pairs`` is the
+surface pair list at the step's start (collision/pair_lists/keeping.py), which the explicit
 methods leave to the pass after the step and backward Euler's solve also takes a body's own
-pairs from (implicit/own_contact.py). It returns the list for that pass: ``pairs``, or one
-renewed within the step (backward Euler's, at its Newton estimate). ``drive`` takes whole steps
-with it: step, then everything that follows every integrator's update (``finish_step``:
-impacts, body-body contact, the divergence check). Each integrator file binds its step in a
-two-line cached kernel, ``advance = drive(its_step, model, state, its_scratch(x), h, steps,
-pairs)``, where ``pairs`` is the body-body pair list the last call left
-(Integrator.pair_list), returned for the next.
+pairs from. It returns the list for that pass: ``pairs``, or one renewed within the step.
+
+``drive`` takes whole steps with it, each read as the pipeline it is:
+
+    step -> collide (terrain impacts, body-body contact: collision/pipeline.py) -> check divergence
+
+Each integrator file binds its step in a two-line cached kernel, ``advance = drive(its_step,
+model, Motion(x, v), its_scratch(x), h, steps, pairs)``, where ``pairs`` is the state's pair list
+(state.State.pairs), returned for the next call.
 
 Why ``drive`` is inlined rather than a kernel that takes the step as an argument: Numba types a
 function passed as an argument by the identity of its dispatcher object, which is new in every
-process, so a cached kernel with a function argument never finds its cache (it recompiles in
-3 to 4 s every run); and a kernel that calls it with a fixed function is refused caching ("uses
-dynamic globals"). Inlined into each method's own ``advance``, the step function is a constant of
-that kernel, which caches as any other (benchmarks/driver_cache.py checks it).
+process, so a cached kernel with a function argument never finds its cache (it recompiles every
+run); and a kernel that calls it with a fixed function is refused caching ("uses dynamic
+globals"). Inlined into each method's own ``advance``, the step function is a constant of that
+kernel, which caches as any other.
 """
+from typing import NamedTuple
+
 import numpy as np
 from numba import prange
 
 from .._jit import inline_kernel, kernel
-from ..contact import resolve_terrain_impacts
+from ..collision.response.terrain import resolve_terrain_impacts
 from ..forces import force_columns
-from ..surface_collisions import pairs_at, resolve_contacts, start_surface_pairs
+from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
+from ..collision.pipeline import resolve_contacts
+
+class Motion(NamedTuple):
+    """The state an explicit method advances."""
+
+    x: np.ndarray   # (P, 3) m: positions, changed in place
+    v: np.ndarray   # (P, 3) m/s: velocities, changed in place
+
 
 SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold, m^2/s^2
 
@@ -34,16 +46,17 @@ SPEED_SQUARED_LIMIT = 1e6  # the course framework's "System Unstable" threshold,
 @inline_kernel
 def drive(step, model, state, scratch, h, steps, pairs):
     """Take up to ``steps`` steps; returns (steps done, first diverged particle or -1, the
-    body-body pair list for the next call). ``pairs`` is the list the last call left (or
-    none): kept while it still holds (surface_collisions.resolve_contacts) for the positions after
-    each step, however they came about."""
-    x, v = state[0], state[1]
+    surface pair list for the next call). ``pairs`` is the list the last call left (or none):
+    kept while it still holds (pair_lists/keeping.pairs_at) for the positions after each step,
+    however they came about."""
+    x, v = state.x, state.v
     pairs = pairs_now(model, x, pairs)
     start = step_start(model, x)
     for done in range(steps):
         copy_positions(start, x)
         pairs = step(model, state, scratch, h, pairs)
-        particle, pairs = finish_step(model, x, v, start, pairs)
+        pairs = collide(model, x, v, start, pairs)
+        particle = first_diverged(x, v)
         if particle >= 0:
             return done + 1, particle, pairs
     return steps, -1, pairs
@@ -52,7 +65,7 @@ def drive(step, model, state, scratch, h, steps, pairs):
 @kernel
 def pairs_now(model, x, pairs):
     """``pairs`` where it still holds at x, else renewed there, as the pass after each step
-    does (surface_collisions.resolve_contacts); a fresh list where there is none yet (or it
+    does (pipeline.resolve_contacts); a fresh list where there is none yet (or it
     was found for another number of particles). Why check here too: between calls the state
     may have been replaced (``Simulation.state = ...``, ``load_state``, edited positions), and
     backward Euler's solve takes a body's own pairs from this list before the post-step pass
@@ -62,7 +75,7 @@ def pairs_now(model, x, pairs):
     proven again: the same list, at the cost of a proof)."""
     if model.surface_triangles.shape[0] == 0:
         return pairs
-    if pairs[2].shape[0] != x.shape[0]:
+    if pairs.found_at.shape[0] != x.shape[0]:
         return start_surface_pairs(model, x)
     return pairs_at(model, x, pairs)
 
@@ -79,7 +92,7 @@ def step_start(model, x):
 @kernel
 def copy_positions(out, x):
     """out[:] = x, where out has room for them (a plain loop: in a kernel, a slice assignment
-    of cloth-balls's 629 particles took 1.6 us against 0.5 us, every step)."""
+    costs a few times more, every step)."""
     for i in range(out.shape[0]):
         for c in range(3):
             out[i, c] = x[i, c]
@@ -138,11 +151,9 @@ def is_diverged(vx, vy, vz, position):
 
 
 @inline_kernel
-def finish_step(model, x, v, start, pairs):
-    """Everything after the integrator's update: terrain impacts, body-body contact (balls
-    and surfaces in one set, from the step's ``start`` positions and the surface pair list),
-    then the divergence check. Returns (first diverged particle or -1, the pair list for the
-    next step)."""
+def collide(model, x, v, start, pairs):
+    """Everything contact does after the integrator's update: terrain impacts, then body-body
+    contact (balls and surfaces in one set, from the step's ``start`` positions and the surface
+    pair list: collision/pipeline.py). Returns the pair list for the next step."""
     resolve_terrain_impacts(model, x, v)
-    pairs = resolve_contacts(model, x, v, start, pairs)
-    return first_diverged(x, v), pairs
+    return resolve_contacts(model, x, v, start, pairs)

@@ -1,8 +1,8 @@
 """Explicit (forward) Euler: x' = x + h v, v' = v + h a(x, v). First order."""
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations
-from . import KernelIntegrator, register
-from ._steps import add_scaled, drive, one_stage_scratch
+from .base import KernelIntegrator, register
+from ._steps import add_scaled, Motion, drive, one_stage_scratch
 
 
 @inline_kernel
@@ -17,13 +17,13 @@ def explicit_euler_step(model, state, scratch, h, pairs):
 
 @kernel
 def advance(model, x, v, h, steps, pairs):
-    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps, pairs)
+    return drive(explicit_euler_step, model, Motion(x, v), one_stage_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(explicit_euler_step, model, (x, v), one_stage_scratch(x), h, steps, pairs)
+    return drive(explicit_euler_step, model, Motion(x, v), one_stage_scratch(x), h, steps, pairs)
 
 
 @register

@@ -15,7 +15,7 @@ matrix symmetric positive definite) in jacobian.py, the block sparsity pattern, 
 springs and built once per model, in pattern.py, the filtered solve in cg.py, and pinned
 particles and terrain contact (normal velocity floors, friction inside the solve, restitution)
 as constraints of the solve in constraints.py, and ball-particle contact as stiff one-sided
-penalty springs of the solve in ball_contact.py: found each step for the pairs the step can bring
+penalty springs of the solve in penalty.py: found each step for the pairs the step can bring
 together, added to the matrix-vector products of the solve (the pattern stays fixed), and kept
 or released between solves with the terrain contacts. Without them the solve would pull cloth
 into a ball faster than the post-step correction pushes it out, and at large steps a dropped or
@@ -23,32 +23,182 @@ thrown ball would pass through the cloth. When nothing is constrained, each solv
 correction along the rigid translations that makes it conserve momentum to rounding, not just to
 the solve's tolerance (cg.py). A step that carries a surface through another (stiff as they
 are, penalty contacts give under a heavy enough load) is taken again in halves
-(implicit/halving.py). After each step the impact and collision passes and the divergence check
+(collision/ccd/crossing_check.py). After each step the impact and collision passes and the divergence check
 every integrator runs (``_steps.finish_step``).
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from .._jit import kernel
-from ..errors import require, SceneError
+from ..collision.ccd.crossing_check import MOST_HALVINGS, carried_through
+from ..collision.contact_sets.solve import find_solve_contacts
+from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, any_self_collision, grown_own_pairs,
+                                              own_pairs_touching)
+from ..collision.pair_lists.solve_pairs import kept_surface_pairs
+from ..collision.response.penalty import (linearize_contacts, newton_iterations_needed,
+                                          update_active_contacts)
+from ..collision.response.solve_friction import apply_contact_friction
+from ..errors import SceneError, require
 from ..forces import force_columns, spring_forces
-from ..implicit.ball_contact import (find_solve_contacts, linearize_contacts,
-                                     newton_iterations_needed, update_active_contacts)
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
-from ..implicit.contact_friction import apply_contact_friction
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
-from ..implicit.halving import MOST_HALVINGS, carried_through
-from ..implicit.own_contact import MOST_OWN_REDOS, any_self_collision, grown_own_pairs, \
-    own_pairs_touching
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
-from ..implicit.surface_contact import kept_surface_pairs
-from . import Integrator, register
+from ..state import ContactMemory
+from .base import Integrator, register
 from ._steps import add_scaled, copy_positions, drive
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
+
+
+class ImplicitState(NamedTuple):
+    """What a backward Euler step advances, in place (state.State's arrays)."""
+
+    x: np.ndarray          # (P, 3) m: positions
+    v: np.ndarray          # (P, 3) m/s: velocities
+    memory: ContactMemory  # terrain contacts and the last velocity change
+
+
+class Settings(NamedTuple):
+    """The integrator's options (ImplicitEuler)."""
+
+    newton_iterations: int   # linearized solves a step asks for (contacts may ask for more)
+    tolerance: float         # each conjugate-gradient solve's relative residual
+    max_iterations: int      # the most conjugate-gradient iterations a solve takes
+
+
+class Statistics(NamedTuple):
+    """Running totals, for diagnostics (each a (1,) int64 array, added to in place)."""
+
+    cg_iterations: np.ndarray   # conjugate-gradient iterations
+    linear_solves: np.ndarray   # linear solves (several a Newton iteration when contacts change)
+    halvings: np.ndarray        # times a step or a part of one was cut in half
+
+    @classmethod
+    def zeros(cls) -> "Statistics":
+        return cls(np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(1, np.int64))
+
+
+class Workspace(NamedTuple):
+    """The arrays a step works in, allocated once a call (``workspace``)."""
+
+    blocks: np.ndarray     # (B, 3, 3): the stored blocks of A = M - h D - h^2 K
+    terms: tuple           # the springs' terms of A that are not stored (implicit/spring_terms.py)
+    force: np.ndarray      # (P, 3) N: the spring forces at the estimate
+    columns: np.ndarray    # the force kernel's columns (forces.force_columns)
+    rhs: np.ndarray        # (P, 3) N s: b, the right-hand side
+    dv: np.ndarray         # (P, 3) m/s: the step's velocity change so far
+    ddv: np.ndarray        # (P, 3) m/s: this Newton iteration's correction to it
+    x_k: np.ndarray        # (P, 3) m: the estimate's positions x + h (v + dv)
+    v_k: np.ndarray        # (P, 3) m/s: the estimate's velocities v + dv
+    normal: np.ndarray     # (P, 3): each constrained particle's terrain normal
+    reaction: np.ndarray   # (P, 3) N s: A ddv - b, the constraints' reaction impulses
+    r: np.ndarray          # (P, 3): conjugate gradients' residual
+    s: np.ndarray          # (P, 3): its search direction
+    c: np.ndarray          # (P, 3): its preconditioned residual
+    q: np.ndarray          # (P, 3): its products A s
+
+
+class Scratch(NamedTuple):
+    """What ``implicit_euler_step`` takes besides the state: the model's solve layout, the
+    settings, the work arrays and room for the state at a step's start and a part's."""
+
+    layout: tuple                # implicit/pattern.SolveLayout
+    settings: Settings
+    work: Workspace
+    solve_pairs: tuple           # collision/pair_lists.SolvePairList, kept between steps
+    statistics: Statistics
+    start: ImplicitState         # room for the state at the step's start
+    part: ImplicitState          # room for the state at the start of a part of the step
+
+
+# --- the method ---------------------------------------------------------------------------------
+
+@kernel
+def backward_euler_step(model, state, scratch, h, pairs):
+    """One step of backward Euler, linearized as Baraff and Witkin (module doc): Newton
+    iterations about the estimate (x_k, v_k) = (x + h (v + dv), v + dv), each solving
+        A ddv = b,   A = M - h dF/dv - h^2 dF/dx (at x_k),
+                     b = h F(x_k, v_k) - M dv   (+ h^2 dF/dx v in the first iteration)
+    with the contacts as constraints and penalty springs of the solve. ``pairs``: the post-step
+    pass's surface pair list at x, which a self-colliding body's own contacts come from; the
+    list at the step's end is returned."""
+    work, settings = scratch.work, scratch.settings
+    contacts, own, pairs = find_step_contacts(model, state, scratch.solve_pairs, work, h, pairs)
+    start_estimate(state, work)
+    needed = newton_iterations_needed(model, contacts, state.v, h, settings.newton_iterations)
+    newton = redone = 0
+    while newton < needed:
+        assemble_system(model, scratch.layout, state, work, contacts, h, newton == 0)
+        solve_with_contacts(model, scratch, state, contacts, h, newton == 0)
+        if redone < MOST_OWN_REDOS and any_self_collision(model):
+            grew, own, pairs = own_pairs_met(model, state, work, h, own, pairs)
+            if grew:   # solve this iteration again, from where it started, with them
+                contacts = find_solve_contacts(model, state.x, state.v, h, scratch.solve_pairs,
+                                               own)
+                redone += 1
+                continue
+        update_estimate(state, work, work.ddv, h)
+        newton += 1
+    end_step(model, state, work, contacts, h)
+    return pairs
+
+
+@kernel
+def find_step_contacts(model, state, solve_pairs, work, h, pairs):
+    """The step's constraints (pins, terrain contacts: into the state's memory and
+    ``work.normal``) and its contact set; returns (the contact set, a self-colliding body's own
+    pairs in contact at x, the post-step list at x)."""
+    x, v, memory = state
+    find_constraints(model, x, v, h, memory.kind, work.normal, memory.terrain,
+                     memory.normal_floor, memory.friction_damping)
+    own, pairs = own_pairs_touching(model, x, pairs)
+    contacts = find_solve_contacts(model, x, v, h, solve_pairs, own)
+    return contacts, own, pairs
+
+
+@kernel
+def start_estimate(state, work):
+    """dv = 0: the first estimate is (x, v)."""
+    work.dv[:] = 0.0
+    work.x_k[:] = state.x
+    work.v_k[:] = state.v
+
+
+@kernel
+def update_estimate(state, work, ddv, h):
+    """dv += ddv; v_k = v + dv, x_k = x + h v_k."""
+    add_scaled(work.dv, work.dv, 1.0, ddv)
+    add_scaled(work.v_k, state.v, 1.0, work.dv)
+    add_scaled(work.x_k, state.x, h, work.v_k)
+
+
+@kernel
+def assemble_system(model, layout, state, work, contacts, h, first):
+    """A = M - h D - h^2 K at the estimate and b (``newton_rhs``), the contacts linearized into
+    both, and ddv's start: the constrained components held, the friction carried from the last
+    step put back inside the friction cone (first iteration only)."""
+    x, v, memory = state
+    pattern = layout.diagonal
+    assemble_diagonal_and_terms(model, pattern, work.x_k, 1.0, h, h * h, work.blocks, work.terms)
+    newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
+               work.rhs)
+    linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
+    work.ddv[:] = 0.0
+    for i in range(x.shape[0]):
+        hold_constrained(i, memory.kind, work.normal, memory.normal_floor, v, work.dv, work.ddv)
+        damping = memory.friction_damping[i]   # the fresh matrix has none yet
+        memory.friction_damping[i] = 0.0
+        if first:   # carried from the last step: back inside the friction cone
+            damping = remembered_friction_in_cone(model, pattern, work.blocks, work.rhs, i,
+                                                  memory.kind, memory.terrain, work.normal, v,
+                                                  work.dv, work.ddv, damping)
+        set_friction_damping(i, damping, pattern, work.blocks, work.rhs, work.normal, v, work.dv,
+                             memory.friction_damping)
 
 
 @kernel
@@ -66,132 +216,86 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
 
 
 @kernel
-def solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x, v, dv, h, kind, normal,
-                        terrain, normal_floor, friction_damping, guess, ddv, tolerance,
-                        max_iterations, reaction, r, s, c, q):
-    """Solve for ddv, updating terrain contacts and friction (implicit.constraints) and
-    the ball and surface contacts (implicit.ball_contact) between solves; the first solve starts
-    along ``guess`` (cg.mass_start). Returns the conjugate-gradient iterations taken and the
-    number of solves."""
+def solve_with_contacts(model, scratch, state, contacts, h, first):
+    """Solve A ddv = b for ``work.ddv``, updating terrain contacts and friction
+    (implicit/constraints.py) and the penalty contacts' active set (collision/response/penalty.py)
+    between solves, MAX_CONTACT_UPDATES times at most. The first solve of a step starts along the
+    last step's velocity change (cg.mass_start says why; the solution is the same to the
+    tolerance); later Newton iterations solve for a correction, for which it is no guess."""
+    x, v, memory = state
+    work, settings, statistics = scratch.work, scratch.settings, scratch.statistics
+    pattern, blocks, terms, rhs, dv, ddv = (scratch.layout.diagonal, work.blocks, work.terms,
+                                           work.rhs, work.dv, work.ddv)
+    kind, normal, normal_floor = memory.kind, work.normal, memory.normal_floor
+    r, s, c, q = work.r, work.s, work.c, work.q
+    guess = memory.velocity_change if first else np.zeros((0, 3))
     mass_start(pattern, blocks, terms, contacts, rhs, kind, normal, model.inv_mass, guess, ddv, r,
                s, q)
     iterations, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
-                                       tolerance, max_iterations, 0.0, r, s, c, q)
+                                       settings.tolerance, settings.max_iterations, 0.0, r, s, c,
+                                       q)
     conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
     for update in range(MAX_CONTACT_UPDATES):
         system_multiply(pattern, blocks, terms, contacts, ddv, q)
-        add_scaled(reaction, q, -1.0, rhs)
+        add_scaled(work.reaction, q, -1.0, rhs)
         terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
-                                          normal, terrain, normal_floor, friction_damping,
-                                          reaction)
+                                          normal, memory.terrain, normal_floor,
+                                          memory.friction_damping, work.reaction)
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
             break
         more, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
-                                     tolerance, max_iterations, reference, r, s, c, q)
+                                     settings.tolerance, settings.max_iterations, reference, r,
+                                     s, c, q)
         conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
         solves += 1
-    return iterations, solves
+    statistics.cg_iterations[0] += iterations
+    statistics.linear_solves[0] += solves
 
 
 @kernel
-def backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance, max_iterations,
-                        work, kind, terrain, normal_floor, friction_damping, last_change,
-                        statistics, pairs):
-    """One step; adds its conjugate-gradient iterations and linear solves to statistics.
-    ``pairs``: the post-step pass's surface pair list at x, whose pairs of one body in contact,
-    at x and at each Newton estimate, the solve takes as contacts (implicit/own_contact.py).
-
-    The first solve starts along the last step's velocity change (last_change, kept in the
-    state; cg.mass_start says why). The solution is the same to the CG tolerance. Later Newton
-    iterations solve for a correction, for which it is no guess: they start along none."""
-    blocks, force, rhs, dv, ddv, x_k, v_k, normal, reaction, r, s, c, q, columns, terms, kept = work
-    pattern = layout.diagonal
-    find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping)
-    own_points, own_edges, pairs = own_pairs_touching(model, x, pairs)
-    contacts = find_solve_contacts(model, x, v, h, kept, own_points, own_edges)
-    dv[:] = 0.0
-    x_k[:] = x
-    v_k[:] = v
-    no_guess = np.zeros((0, 3))
-    needed = newton_iterations_needed(model, contacts, v, h, newton_iterations)
-    newton = redone = 0
-    while newton < needed:
-        guess = last_change if newton == 0 else no_guess
-        assemble_diagonal_and_terms(model, pattern, x_k, 1.0, h, h * h, blocks, terms)
-        newton_rhs(model, x, x_k, v, v_k, dv, h, newton == 0, force, columns, rhs)
-        linearize_contacts(model, contacts, x, v, dv, h, rhs)
-        ddv[:] = 0.0
-        for i in range(x.shape[0]):
-            hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
-            damping = friction_damping[i]   # the fresh matrix has none yet
-            friction_damping[i] = 0.0
-            if newton == 0:   # carried from the last step: back inside the friction cone
-                damping = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind,
-                                                      terrain, normal, v, dv, ddv, damping)
-            set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv,
-                                 friction_damping)
-        iterations, solves = solve_with_contacts(model, pattern, blocks, terms, contacts, rhs, x,
-                                                 v, dv, h, kind, normal, terrain, normal_floor,
-                                                 friction_damping, guess, ddv, tolerance,
-                                                 max_iterations, reaction, r, s, c, q)
-        statistics[0] += iterations
-        statistics[1] += solves
-        if redone < MOST_OWN_REDOS and any_self_collision(model):
-            # the own pairs this solve brings into contact (own_contact.py): where there are
-            # new ones, this iteration is solved again with them, from where it started
-            add_scaled(v_k, v_k, 1.0, ddv)
-            add_scaled(x_k, x, h, v_k)
-            own_points, own_edges, grew, pairs = grown_own_pairs(model, x_k, pairs, own_points,
-                                                                 own_edges)
-            add_scaled(v_k, v, 1.0, dv)
-            add_scaled(x_k, x, h, v_k)
-            if grew:
-                contacts = find_solve_contacts(model, x, v, h, kept, own_points, own_edges)
-                redone += 1
-                continue
-        add_scaled(dv, dv, 1.0, ddv)
-        add_scaled(v_k, v, 1.0, dv)
-        add_scaled(x_k, x, h, v_k)
-        newton += 1
-    if apply_contact_friction(model, contacts, x_k, v_k, h):   # the penalty contacts' friction
-        add_scaled(x_k, x, h, v_k)
-    x[:] = x_k
-    last_change[:] = dv
-    restore_impact_speeds(kind, normal, normal_floor, v, v_k)   # for restitution to reflect
-    v[:] = v_k
-    return pairs
+def own_pairs_met(model, state, work, h, own, pairs):
+    """(whether a self-colliding body's own pairs in contact grew, them (OwnPairs), the list):
+    ``own`` and those that the estimate after this solve, x + h (v_k + ddv), brings into
+    contact (collision/pair_lists/own_pairs.py). The estimate is put back where the iteration
+    started."""
+    add_scaled(work.v_k, work.v_k, 1.0, work.ddv)
+    add_scaled(work.x_k, state.x, h, work.v_k)
+    own, grew, pairs = grown_own_pairs(model, work.x_k, pairs, own)
+    add_scaled(work.v_k, state.v, 1.0, work.dv)
+    add_scaled(work.x_k, state.x, h, work.v_k)
+    return grew, own, pairs
 
 
 @kernel
-def workspace(layout, x, kept):
-    """The arrays a step works in: the matrix's diagonal blocks, twelve vectors shaped like x,
-    the force columns, the springs' terms of the matrix and the kept surface pair list
-    ``kept`` (implicit.surface_contact.kept_surface_pairs)."""
-    blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
-    vectors = [np.zeros_like(x) for _ in range(12)]
-    return (blocks, vectors[0], vectors[1], vectors[2], vectors[3], vectors[4], vectors[5],
-            vectors[6], vectors[7], vectors[8], vectors[9], vectors[10], vectors[11],
-            force_columns(x), spring_terms_like(layout.runs, layout.run_entries,
-                                                layout.loose_pairs, x), kept)
+def end_step(model, state, work, contacts, h):
+    """The penalty contacts' friction, then x = x_k, v = v_k; the velocity change is kept as
+    the next step's guess, and impact speeds are restored for the restitution pass."""
+    x, v, memory = state
+    if apply_contact_friction(model, contacts, work.x_k, work.v_k, h):
+        add_scaled(work.x_k, x, h, work.v_k)
+    x[:] = work.x_k
+    memory.velocity_change[:] = work.dv
+    restore_impact_speeds(memory.kind, work.normal, memory.normal_floor, v, work.v_k)
+    v[:] = work.v_k
 
+
+# --- a step taken again in halves ---------------------------------------------------------------
 
 @kernel
 def implicit_euler_step(model, state, scratch, h, pairs):
-    """backward_euler_step as the driver calls it: the state carries the contacts
-    (state.ContactMemory), the scratch the pattern, the settings, the work arrays, the
-    statistics and room for the state at the start of the step and of a part of it; ``pairs`` is
-    the post-step pass's list at the step's start. A step that carries a surface through another
-    is taken again in halves (implicit/halving.py); statistics[2] counts the times a step or a
-    part was cut in half."""
+    """backward_euler_step as the driver calls it (_steps.drive). A step that carries a surface
+    through another is taken again from its start as two steps of half the size, each checked
+    the same way (collision/ccd/crossing_check.py), down to 1 / 2^MOST_HALVINGS of the step; after
+    a half that passes, steps grow back. Where even the shortest part crosses, the step is taken
+    whole, as without the check."""
     if model.surface_triangles.shape[0] == 0:
-        return state_step(model, state, scratch, h, pairs)
-    kept, statistics = scratch[4][15], scratch[5]   # the solve's pair list (workspace)
-    start, part = scratch[6], scratch[7]   # room for the step's start, and a part's
+        return backward_euler_step(model, state, scratch, h, pairs)
+    start = scratch.start
     copy_state(start, state)
     saved = start   # where the part being taken started
     whole = 1 << MOST_HALVINGS
@@ -199,72 +303,69 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
-        stepped = state_step(model, state, scratch, h * size / whole, pairs)
-        if carried_through(model, saved[0], state[0], stepped, kept):
-            if size == 1:   # even the shortest part crossed: the step as it was (halving.py)
+        stepped = backward_euler_step(model, state, scratch, h * size / whole, pairs)
+        if carried_through(model, saved.x, state.x, stepped, scratch.solve_pairs):
+            if size == 1:   # even the shortest part crossed: the step as it was
                 copy_state(state, start)
-                return state_step(model, state, scratch, h, pairs_at_start)
+                return backward_euler_step(model, state, scratch, h, pairs_at_start)
             copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
-            statistics[2] += 1
+            scratch.statistics.halvings[0] += 1
             continue
         pairs = stepped
         done += size
         if done % (2 * size) == 0 and size < whole:
             size *= 2   # the halves went through: back to longer steps
         if done < whole:
-            copy_state(part, state)
-            saved = part
+            copy_state(scratch.part, state)
+            saved = scratch.part
     return pairs
 
 
 @kernel
 def saved_state(state):
-    """A copy of the implicit step's state (the tuple implicit_euler_step takes)."""
-    x, v, kind, terrain, normal_floor, friction_damping, last_change = state
-    return (x.copy(), v.copy(), kind.copy(), terrain.copy(), normal_floor.copy(),
-            friction_damping.copy(), last_change.copy())
+    """Room for a copy of ``state`` (an ImplicitState)."""
+    memory = state.memory
+    return ImplicitState(state.x.copy(), state.v.copy(),
+                         ContactMemory(memory.kind.copy(), memory.terrain.copy(),
+                                       memory.normal_floor.copy(), memory.friction_damping.copy(),
+                                       memory.velocity_change.copy()))
 
 
 @kernel
 def copy_state(out, state):
-    """Copy the implicit step's ``state`` into ``out`` (one like it: saved_state), in place."""
-    copy_positions(out[0], state[0])
-    copy_positions(out[1], state[1])
-    copy_positions(out[6], state[6])
-    for i in range(state[2].shape[0]):
-        out[2][i] = state[2][i]
-        out[3][i] = state[3][i]
-        out[4][i] = state[4][i]
-        out[5][i] = state[5][i]
+    """Copy ``state`` into ``out`` (one like it: saved_state), in place."""
+    copy_positions(out.x, state.x)
+    copy_positions(out.v, state.v)
+    copy_positions(out.memory.velocity_change, state.memory.velocity_change)
+    memory, saved = state.memory, out.memory
+    for i in range(memory.kind.shape[0]):
+        saved.kind[i] = memory.kind[i]
+        saved.terrain[i] = memory.terrain[i]
+        saved.normal_floor[i] = memory.normal_floor[i]
+        saved.friction_damping[i] = memory.friction_damping[i]
+
+
+# --- the driver ---------------------------------------------------------------------------------
+
+@kernel
+def workspace(layout, x):
+    """The arrays a step works in (Workspace)."""
+    blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
+    vectors = [np.zeros_like(x) for _ in range(12)]
+    terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
+    return Workspace(blocks, terms, vectors[0], force_columns(x), vectors[1], vectors[2],
+                     vectors[3], vectors[4], vectors[5], vectors[6], vectors[7], vectors[8],
+                     vectors[9], vectors[10], vectors[11])
 
 
 @kernel
-def state_step(model, state, scratch, h, pairs):
-    """One backward_euler_step of ``state`` with ``scratch`` (implicit_euler_step)."""
-    x, v, kind, terrain, normal_floor, friction_damping, last_change = state
-    layout, newton_iterations, tolerance, max_iterations, work, statistics, _, _ = scratch
-    return backward_euler_step(model, layout, x, v, h, newton_iterations, tolerance,
-                               max_iterations, work, kind, terrain, normal_floor,
-                               friction_damping, last_change, statistics, pairs)
-
-
-@kernel
-def advance(model, layout, x, v, h, steps, newton_iterations, tolerance, max_iterations,
-            kind, terrain, normal_floor, friction_damping, last_change, statistics, pairs,
-            kept):
-    """Take ``steps`` steps; returns (steps done, first diverged particle or -1, the
-    post-step pass's pair list: _steps.drive). ``kept`` is the solve's own surface pair list
-    (implicit.surface_contact.kept_surface_pairs), changed in place.
-
-    kind, terrain, normal_floor and friction_damping carry the contacts from one step (and one
-    call) to the next, last_change the velocity change; statistics[0], [1] and [2] count the
-    conjugate-gradient iterations, the linear solves and the halvings (implicit_euler_step)."""
-    state = (x, v, kind, terrain, normal_floor, friction_damping, last_change)
-    # the last entries: room for a step's start and a part's, which a step taken again in
-    # halves goes back to (implicit_euler_step)
-    scratch = (layout, newton_iterations, tolerance, max_iterations, workspace(layout, x, kept),
-               statistics, saved_state(state), saved_state(state))
+def advance(model, layout, settings, state, solve_pairs, statistics, h, steps, pairs):
+    """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
+    done, first diverged particle or -1, the post-step pass's pair list: _steps.drive).
+    ``solve_pairs`` is the solve's own surface pair list (a SolvePairList), changed in place."""
+    scratch = Scratch(layout, settings, workspace(layout, state.x), solve_pairs, statistics,
+                      saved_state(state), saved_state(state))
     return drive(implicit_euler_step, model, state, scratch, h, steps, pairs)
 
 
@@ -292,20 +393,7 @@ class ImplicitEuler(Integrator):
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
-        # running totals, for diagnostics: conjugate-gradient iterations, linear solves, times a
-        # step or a part of one was cut in half (implicit/halving.py)
-        self.statistics = np.zeros(3, np.int64)
-
-    def solve_pair_list(self, model, x):
-        """The solve's surface pair list (implicit/surface_contact.py), kept from call to call
-        for ``model`` like the post-step pass's (Integrator.pair_list): each step checks that it
-        still holds before using it. Stepping one step a call (the viewer at 1/60 s) searched
-        it afresh every call: cloth-drape took 20.5 to 21.2 ms a step that way, now 13.6 to
-        13.8, against 9.9 to 11.1 in one call (benchmarks/step_per_call.py)."""
-        kept = self.model_cache(model)
-        if "solve pairs" not in kept:
-            kept["solve pairs"] = kept_surface_pairs(x)
-        return kept["solve pairs"]
+        self.statistics = Statistics.zeros()   # running totals, for diagnostics
 
     def pattern(self, model):
         """What the solve needs of the model (pattern.SolveLayout), built on first use and kept
@@ -317,16 +405,14 @@ class ImplicitEuler(Integrator):
 
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
-        # the contacts carried between steps live in the state (state.ContactMemory)
-        done, particle, pairs = advance(model.arrays, self.pattern(model), state.positions,
-                                        state.velocities, float(dt), int(steps),
-                                        self.newton_iterations, self.cg_tolerance,
-                                        self.cg_max_iterations, *state.contacts,
-                                        self.statistics, self.pair_list(model),
-                                        self.solve_pair_list(model, state.positions))
-        self.keep_pair_list(model, pairs)
+        if state.solve_pairs is None or state.solve_pairs.found_at.shape != state.positions.shape:
+            state.solve_pairs = kept_surface_pairs(state.positions)
+        settings = Settings(self.newton_iterations, self.cg_tolerance, self.cg_max_iterations)
+        done, particle, state.pairs = advance(
+            model.arrays, self.pattern(model), settings,
+            ImplicitState(state.positions, state.velocities, state.contacts), state.solve_pairs,
+            self.statistics, float(dt), int(steps), state.pairs)
         return int(done), int(particle)
-
 
 def _is_whole(value) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)

@@ -5,8 +5,8 @@
 """
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations
-from . import KernelIntegrator, register
-from ._steps import add_scaled, drive, two_stage_scratch
+from .base import KernelIntegrator, register
+from ._steps import add_scaled, Motion, drive, two_stage_scratch
 
 
 @inline_kernel
@@ -24,13 +24,13 @@ def midpoint_step(model, state, scratch, h, pairs):
 
 @kernel
 def advance(model, x, v, h, steps, pairs):
-    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps, pairs)
+    return drive(midpoint_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(midpoint_step, model, (x, v), two_stage_scratch(x), h, steps, pairs)
+    return drive(midpoint_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
 
 
 @register

@@ -11,8 +11,8 @@ from numba import prange
 
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
-from . import KernelIntegrator, register
-from ._steps import drive
+from .base import KernelIntegrator, register
+from ._steps import Motion, drive
 
 
 @inline_kernel
@@ -74,13 +74,13 @@ def rk4_scratch(x):
 
 @kernel
 def advance(model, x, v, h, steps, pairs):
-    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps, pairs)
+    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(rk4_step, model, (x, v), rk4_scratch(x), h, steps, pairs)
+    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
 
 
 @register

@@ -1,7 +1,7 @@
 """Where body-body contacts are, for drawing them: no window, only the contact kernels.
 
 The contacts of a state are those the step's own narrow phase would find there
-(surface_collisions.touching_contacts, with the state as its own start): each is a stencil of
+(contact_sets/after_step.touching_contacts, with the state as its own start): each is a stencil of
 signed weights c over four particles. Its point is on the second side: the closest point
 -sum of c_i x_i over the negative weights (the triangle's closest point, the second edge's, or
 a ball's partner), moved out by the partner's radius if it is a ball; its normal points from
@@ -13,8 +13,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..proximity import surface_pairs
-from ..surface_collisions import ball_pairs, surface_skin, touching_contacts
+from ..collision.broad_phase.surfaces import surface_pairs
+from ..collision.pipeline import ball_pairs
+from ..collision.pair_lists.keeping import surface_skin
+from ..collision.contact_sets.after_step import touching_contacts
 
 NORMAL_LENGTH = 2.0   # drawn normals, in rest distances (thicknesses) of their pair
 BALL_NORMAL_LENGTH = 0.5   # a ball's drawn contact normals, in its radii

@@ -27,9 +27,8 @@ The generated dispatcher has no cache of its own (it has no source file), but th
 call it have theirs (``cache=True``): a cached caller carries the dispatcher's compiled code, so
 a warm start compiles nothing (tests/test_mesh_terrains.py checks that the contact kernel loads
 from the cache). Each kind's kernel is inlined into the dispatcher and the dispatcher into its
-callers at Numba's level (dispatch.py says why): the plane's contact kernel costs what it did
-with the hand-written chain (5.3 against 5.5 us for the 1000 particles of jelly-plane in one
-measurement; benchmarks/terrain_dispatch.py times whole jelly-plane steps before and after).
+callers at Numba's level (dispatch.py says why), so the plane's contact kernel costs what a
+hand-written chain of kinds would (benchmarks/terrain_dispatch.py times it).
 """
 import importlib
 import pkgutil

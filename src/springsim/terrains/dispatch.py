@@ -2,14 +2,14 @@
 
 The package docstring says why it is generated. The source it compiles reads, for two kinds::
 
-    def terrain_distance(model, t, x0, x1, x2, particle_radius):
-        kind = model.terrain_kind[t]
-        row = model.terrain_parameters[t]
+    def terrain_distance(kind, row, data, x0, x1, x2, particle_radius):
         if kind == 0:
-            phi, nx, ny, nz = kernel_0(row, model.terrain_data, x0, x1, x2)
+            phi, nx, ny, nz = kernel_0(row, data, x0, x1, x2)
         else:
-            phi, nx, ny, nz = kernel_1(row, model.terrain_data, x0, x1, x2)
+            phi, nx, ny, nz = kernel_1(row, data, x0, x1, x2)
         return phi - particle_radius, nx, ny, nz
+
+(``kernel_k`` is the distance kernel of the k-th registered kind.)
 """
 import linecache
 
@@ -69,7 +69,7 @@ def looks_ahead_source(kinds) -> str:
 
 def build_looks_ahead(kinds):
     """``terrain_looks_ahead(kind)``: whether the kind's class sets ``look_ahead`` (a long
-    lookup, which the contact kernel does a block of particles ahead; contact.py says why)."""
+    lookup, which the contact kernel does a block of particles ahead; collision/response/terrain.py says why)."""
     namespace = {}
     exec(compile(looks_ahead_source(kinds), FILENAME, "exec"), namespace)
     return njit(inline="always")(namespace["terrain_looks_ahead"])

@@ -5,9 +5,8 @@ The distance query is a signed distance grid, built once when the model is built
 trilinearly in the kernel, its gradient giving the normal. Why a grid and not a BVH with exact
 closest points: contact asks every particle for its distance to every terrain in every stage of
 every step, and a grid answers in constant time with eight neighbouring loads and no search,
-where a BVH walks a tree per particle (benchmarks/mesh_terrain.py: the whole contact pass costs
-about 16 ns a particle on a flat mesh floor against the plane's 6 ns, the lookups being done a
-block of particles ahead, ``look_ahead``). A grid is
+where a BVH walks a tree per particle (benchmarks/mesh_terrain.py compares the contact pass
+with the plane's, the lookups being done a block of particles ahead, ``look_ahead``). A grid is
 exact where the distance is linear across a cell: on the flat parts of a mesh (ramps, floors,
 stairs' treads) trilinear interpolation reproduces the exact distance and normal to round-off, so
 a ramp gives the analytic tilted plane's outcome. Curved parts are smoothed at the scale of a cell (``resolution`` cells along the longest
@@ -147,7 +146,7 @@ class MeshTerrain(Contact):
     resolution: int = 128
 
     distance_kernel = mesh_distance
-    look_ahead = True   # a long lookup: contact does it a block of particles ahead (contact.py)
+    look_ahead = True   # a long lookup: contact does it a block of particles ahead (collision/response/terrain.py)
 
     def validate(self, key: str) -> None:
         self.validate_contact(key)

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from ..bodies.cube import Cube
-from ..bodies.surface_contact import SurfaceContact
+from ..collision.shapes.settings import SurfaceContact
 from ..errors import SceneError, SimulationDiverged
 from ..render.drawing import DrawOptions
 from ..scene import Scene

@@ -7,7 +7,7 @@ orientation there and the boundary stays a simple curve, the projection is one t
 mapped by positive triangles onto a region whose boundary curve winds once covers that region
 once (the degree argument).
 
-The pair search (proximity.py) takes a point p and a triangle of one body only if no corner is p
+The pair search (collision/broad_phase/surfaces.py) takes a point p and a triangle of one body only if no corner is p
 or a neighbour of p, and two edges only if no end of one is an end of the other or its neighbour.
 In a one-to-one projection, such a point lies outside the triangle and such edges do not cross,
 so each pair's distance there is the distance from some particle p to an edge (r, s) with neither
@@ -24,29 +24,38 @@ N[p]. So no pair of the sheet is closer than ``reach`` if
   with no end in N[p].
 
 What it gives: a flat square grid cloth has its ring edges sqrt(2) spacings from each particle
-against a reach of 0.75 spacing (rest plus skin, surface_collisions.SKIN), so it passes while it
-does not fold over or crumple to half its spacing in the projection. The 100 x 100 cloth-hang
-at 1/60 s, swinging and rippling, passed at 171 of its first 200 steps with the mean normal,
-and at 182 with the axis turned (it failed where its free corner turned over); within its
-bare thickness (surface_collisions.unfolded_now_or_searched), at all 200. A check costs a
-few passes over the triangles and the ring edges, ~12 a particle: 0.5 ms on that cloth against
-9 to 12 ms for a search. Anything it cannot prove goes to the search; it never finds a pair,
-so where it passes, the result is the search's: no pair.
+against a reach of 0.75 spacing (rest plus skin, collision/pipeline.py.SKIN), so it passes while it
+does not fold over or crumple to half its spacing in the projection (a swinging, rippling
+cloth mostly does not; where its free corner turns over, the proof fails, and within its bare
+thickness, keeping.unfolded_now_or_searched, it rarely does). A check costs a few passes over
+the triangles and the ring edges, about twelve a particle, a small part of a search. Anything
+it cannot prove goes to the search; it never finds a pair, so where it passes, the result is
+the search's: no pair.
 """
 import math
 
-import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+import numpy as np
 
-from ._jit import kernel
-from .geometry import area_vector, triangle_normal
-from .proximity import box_grid, joined, region_cells
+from ..._jit import kernel
+from ..broad_phase.grid import box_grid, region_cells
+from ..broad_phase.surfaces import joined
+from ..distance.closest_points import area_vector, triangle_normal
+
 
 FACING = 1e-9     # a triangle faces the axis if its normal's cosine to it is above this
+
+
 AXIS_TURNS = 8    # turns of the axis at most, where the mean normal does not do
+
+
 TURN_BELOW = 0.4  # the triangles whose cosine to the axis is below this pull it
+
+
 TURN = 0.5        # by this share of their mean unit normal
+
+
 STEEP = 0.3       # the turns stop once every triangle's cosine to the axis is this high
 
 
@@ -246,7 +255,7 @@ def listed(r, s, out, count):
 
 @kernel
 def in_closed_neighbourhood(p, q, neighbour_start, neighbours):
-    """Whether q is p or one of its neighbours (proximity.joined)."""
+    """Whether q is p or one of its neighbours (broad_phase/surfaces.joined)."""
     return p == q or joined(neighbour_start, neighbours, p, q)
 
 
@@ -380,7 +389,7 @@ def segment_clear(flat, p, r, s, limit):
 def boundary_clear(boundary, near_boundary, neighbour_start, neighbours, flat, reach):
     """Whether the projected boundary is a simple curve (no two of its edges cross, and two
     that follow each other do not fold back) and every particle near it is at least ``reach``
-    from its edges with no end in N[p]. The boundary edges go into a grid (proximity.box_grid),
+    from its edges with no end in N[p]. The boundary edges go into a grid (grid.box_grid),
     their boxes grown by ``reach``."""
     boxes = np.zeros((boundary.shape[0], 6))
     for g in range(boundary.shape[0]):
@@ -410,7 +419,7 @@ def boundary_clear(boundary, near_boundary, neighbour_start, neighbours, flat, r
 
 @kernel
 def boxes_around(grid, low0, low1, high0, high1, found):
-    """Write to ``found`` the boxes of the grid (proximity.box_grid, flat: z = 0) that overlap
+    """Write to ``found`` the boxes of the grid (grid.box_grid, flat: z = 0) that overlap
     the rectangle; returns how many."""
     origin, cell, dims, cell_start, members, member_boxes, largest = grid
     x0, x1, y0, y1, z0, z1 = region_cells(low0, low1, 0.0, high0, high1, 0.0, origin, cell,

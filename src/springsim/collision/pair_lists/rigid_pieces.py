@@ -2,7 +2,7 @@
 
 A pair list found at positions y holds every pair of surface shapes (a point and a triangle, two
 edges) closer than their rest distance plus the skin s. It still holds at positions x if no pair
-that was farther then has come within its rest distance since. surface_collisions.spread_since
+that was farther then has come within its rest distance since. keeping.spread_since
 bounds how much any distance has shrunk by the spread of the displacements x - y, which a
 translation leaves at zero but a rotation does not: a 4 m cloth swinging at 1/60 s turns by a few
 degrees a step, its points move apart by several thicknesses from each other, and the list was
@@ -30,23 +30,28 @@ shrink by L_(k-1) - 2 delta - rest; the last level is one cell around everything
 level 0 that last level is tried with level 1's budget, the smallest: where one motion fits the
 whole surface that well, the levels between need no look. A level costs four passes over the
 surface particles (its grid's bounds, each particle's cell, its cells' sums, and each
-particle's residual in its 8 windows) and a fit per window: 0.8 to 1.0 ms a check on the
-100 x 100 cloth, against 9 to 12 ms for a search. That cloth-hang at 1/60 s searched at 111
-of its first 199 steps instead of 193 (surface_collisions.RIGID_CHECK_STEPS says when the
-check is tried). Where it still searches,
-the finest windows' residual was above the skin's half after one or two steps: its free edge
-whips at up to 13 m/s and bends as it goes.
+particle's residual in its 8 windows) and a fit per window: about a tenth of a search. A
+swinging cloth then searches at about half the steps it would with the spread alone
+(keeping.RIGID_CHECK_STEPS says when the check is tried); where it still searches, its free
+edge whips and bends faster than a rigid fit per window follows.
 """
 import math
 
 import numpy as np
 
-from ._jit import kernel
-from .broadphase import cell_coordinate, grid_cell_size
+from ..._jit import kernel
+from ..broad_phase.grid import cell_coordinate, grid_cell_size
+
 
 FINEST = 1.5        # the finest cells are this many times wider than the pairs they must take
+
+
 LEVEL_RATIO = 3.0   # a level's cells are this many times wider than the finest pairs it takes
+
+
 SQUARINGS = 16      # of best_rotation's matrix: its 65,536th power
+
+
 MAX_CELLS = 512     # a level's grid has at most this many cells (wider cells where it would not)
 
 
@@ -194,7 +199,7 @@ def best_rotation(covariance, out):
     particles nearly on a line, whose turn about the line is weakly determined; the power
     method from one vector stalled there). The identity where there is nothing to fit (or NaN).
     The check measures the residual of whatever rotation this gives, so an inexact one costs
-    tightness, not correctness; 16 x 64 multiplications against an SVD's 2.4 us."""
+    tightness, not correctness, and it costs a fraction of an SVD."""
     sxx, sxy, sxz = covariance[0, 0], covariance[1, 0], covariance[2, 0]
     syx, syy, syz = covariance[0, 1], covariance[1, 1], covariance[2, 1]
     szx, szy, szz = covariance[0, 2], covariance[1, 2], covariance[2, 2]

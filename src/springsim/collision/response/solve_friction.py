@@ -1,13 +1,13 @@
 """Coulomb friction of the solve's surface contacts, applied when the solve is done.
 
-Why: the penalty springs of ball_contact.py push inside the solve but have no friction, and a
-contact they hold at rest leaves the post-step pass (surface_collisions.py) no approach speed
+Why: the penalty springs of penalty.py push inside the solve but have no friction, and a
+contact they hold at rest leaves the post-step pass (collision/pipeline.py) no approach speed
 to stop, so no normal impulse to scale its friction by: a cube resting on another slid off it
 at about 0.065 m/s. Here each active surface contact's push over the step, its penalty force
 times h,
     J_N = h k (-phi) = (h^2 k) (-phi) / h,      phi = n . sum_i c_i x_i(end of step) - R,
 is the normal impulse that bounds its friction (a cube at rest on another: J_N sums to m g h,
-what gravity gives in a step), and surface_collisions.apply_friction applies Coulomb friction
+what gravity gives in a step), and response/impulses.apply_friction applies Coulomb friction
 against it (static, else kinetic; the same Jacobi passes with mass splitting, so the result
 depends on no order and conserves momentum) to the end-of-step velocities. The positions are
 then taken from those velocities, x + h v, so a contact that sticks does not slide during the
@@ -15,9 +15,10 @@ step either. Ball contacts keep the friction of the post-step pass.
 """
 import numpy as np
 
-from .._jit import kernel
-from ..surface_collisions import PARAMS, apply_friction, surface_contact_keys, surface_params
-from .ball_contact import EDGE_EDGE, POINT_TRIANGLE
+from ..._jit import kernel
+from ..contact_sets import EDGE_EDGE, PARAMS, POINT_TRIANGLE, ImpulseContacts
+from ..contact_sets.after_step import surface_contact_keys, surface_params
+from .impulses import apply_friction
 
 
 @kernel
@@ -47,6 +48,6 @@ def apply_contact_friction(model, contacts, x_end, v, h):
                 phi += weights[p, i] * normal[p, c] * x_end[nodes[p, i], c]
         pushed[k] = coefficient[p] * max(-phi, 0.0) / h
         surface_params(keys, body[nodes[p, 0]], body[nodes[p, 3]], params[k])
-    contacts = (nodes[rows], weights[rows], normal[rows], np.zeros(count), params)
-    apply_friction(model.inv_mass, v, contacts, pushed)
+    rubbing = ImpulseContacts(nodes[rows], weights[rows], normal[rows], np.zeros(count), params)
+    apply_friction(model.inv_mass, v, rubbing, pushed)
     return True

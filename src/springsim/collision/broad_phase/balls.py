@@ -1,6 +1,6 @@
-"""Broad phase of the balls: the overlapping (ball, particle) pairs, found without testing every
-pair. (The surfaces' pairs are proximity.py's; both feed the one contact pass of
-surface_collisions.py and the contact set of implicit/ball_contact.py.)
+"""The balls' broad phase: the overlapping (ball, particle) pairs, found without testing every
+pair. (The surfaces' pairs are surfaces.py's; both feed the post-step pass, collision/pipeline.py,
+and the solve's contact set, contact_sets/solve.py.)
 
 A contact is a pair (a, b) where a is a ball, b any other particle (a ball or a point) and
 |x_a - x_b| < r_a + r_b. A ball-ball contact is listed once, from the lower-numbered ball. Pairs
@@ -16,17 +16,14 @@ whichever method found them, so that both methods give bit-identical simulations
   the sum of both radii (at most 3 x 3 x 3 cells). The cost grows like particles plus balls, not
   like their product.
 """
-import math
-
 import numpy as np
 
-from ._jit import kernel
+from ..._jit import kernel
+from .grid import MAX_CELLS_PER_PARTICLE, grid_cell_size, cell_number, cell_range
+
 
 # Above this many ball-particle tests a step, the grid is cheaper than testing every pair.
 BRUTE_FORCE_PAIR_LIMIT = 20_000
-# The grid never has more cells than this many per particle (a particle far away would otherwise
-# make the bounding box, and the cell array, huge); cells grow instead.
-MAX_CELLS_PER_PARTICLE = 8
 
 
 @kernel
@@ -224,49 +221,6 @@ def bounding_box(x, members):
         if not (np.abs(origin[c]) < np.inf and extent[c] < np.inf):
             origin[c] = extent[c] = 0.0
     return origin, extent
-
-
-@kernel
-def grid_cell_size(extent, cell_size, max_cells):
-    """``cell_size``, doubled until the box of size ``extent`` has at most ``max_cells`` cells
-    (a particle far away would otherwise make the grid, and its memory, huge)."""
-    if not cell_size > 0.0:
-        cell_size = 1.0
-    while ((extent[0] / cell_size + 1.0) * (extent[1] / cell_size + 1.0)
-           * (extent[2] / cell_size + 1.0) > max_cells):
-        cell_size *= 2.0
-    return cell_size
-
-
-@kernel
-def cell_number(x0, x1, x2, origin, cell_size, dims):
-    ix = cell_coordinate(x0, origin[0], cell_size, dims[0])
-    iy = cell_coordinate(x1, origin[1], cell_size, dims[1])
-    iz = cell_coordinate(x2, origin[2], cell_size, dims[2])
-    return (ix * dims[1] + iy) * dims[2] + iz
-
-
-@kernel
-def cell_coordinate(value, origin, cell_size, dim):
-    """The cell index of ``value`` along one axis, clamped to the grid (NaN goes to 0)."""
-    q = (value - origin) / cell_size
-    if not q >= 0.0:
-        return 0
-    if q >= dim:
-        return dim - 1
-    return int(q)
-
-
-@kernel
-def cell_range(centre, reach, origin, cell_size, dim):
-    """First and last cell along one axis that [centre - reach, centre + reach] overlaps.
-
-    The reach is padded by a millionth so that rounding never leaves out a particle lying on
-    its edge; the distance test decides, so searching a little further changes no result.
-    """
-    padded = reach * (1.0 + 1e-6)
-    return (cell_coordinate(centre - padded, origin, cell_size, dim),
-            cell_coordinate(centre + padded, origin, cell_size, dim))
 
 
 @kernel

@@ -1,28 +1,27 @@
 """Which surface pairs backward Euler's solve takes as candidate contacts in a step.
 
-The post-step pass (surface_collisions.py) sees where a step ended; a solve that knows nothing
+The post-step pass (collision/pipeline.py) sees where a step ended; a solve that knows nothing
 of the surfaces can carry a point farther through a surface in one step than that pass can push
 back, and a cube dropped onto another at 1/30 s would sink into it. So implicit_euler makes
 surface contacts stiff one-sided penalty springs of its solve, like the ball contacts
-(ball_contact.py: the contact set, linearization and active set shared by both). What it needs
+(penalty.py: the contact set, linearization and active set shared by both). What it needs
 first is the pairs a step can bring into contact, found here.
 
 A step moves two particles i and j apart or together by at most h |v_i - v_j| <= 2 h max_k
 |v_k - u| for any velocity u (the triangle inequality); u = the centre of the surface points'
 velocity box makes the bound small for bodies moving together (a falling cloth) and 2 h V for
-two bodies approaching at V each. Pairs are searched (proximity.surface_pairs) on the predicted
-positions x + h v with reach = each pair's rest distance + that bound + REACH_SLACK of the
+two bodies approaching at V each. Pairs are searched (broad_phase/surfaces.surface_pairs) on the predicted
+positions x + h v with reach = each pair's rest distance + that bound + SURFACE_REACH_SLACK of the
 largest thickness, for what the solve's velocity change adds. A model without surface contact
 returns at once.
 
 A body's own pairs (a cloth's folds) are not searched here, but taken from the post-step pass's
-list, those in contact at the step's start and at the end of each solve: own_contact.py says
+list, those in contact at the step's start and at the end of each solve: own_pairs.py says
 why.
 
-The search (proximity.py, 0.64 ms a step on cloth-balls's self-colliding 25 x 25 cloth, ten times
-the ball search) is not run every step: it reaches SKIN thicknesses farther, and its list is kept
-(in the integrator's work arrays, for one run of steps) while it still holds every pair a step
-needs. Two points' distance changes by at most 2 max_k |d_k - c| for displacements d since the
+The search (collision/broad_phase/surfaces.py, several times the cost of a step where
+nothing touches) is not run every step: it reaches SKIN thicknesses farther, and its list is
+kept (in the state: State.solve_pairs) while it still holds every pair a step needs. Two points' distance changes by at most 2 max_k |d_k - c| for displacements d since the
 search and any c (c = the middle of their box), so the list holds every pair within the reach
 now as long as reach + 2 max_k |d_k - c| <= the reach it was found with. A kept list has more
 candidates than a fresh one, in the same order; the extra ones are farther than the reach, which
@@ -31,27 +30,26 @@ moves a pair past its slack).
 """
 import math
 
+from numba.typed import List
 import numpy as np
 
-from numba.typed import List
+from ..._jit import kernel
+from ..broad_phase.surfaces import surface_pairs
+from . import SolvePairList
+from .keeping import SKIN, spread_since
 
-from .._jit import kernel
-from ..proximity import surface_pairs
-from ..surface_collisions import spread_since
 
-REACH_SLACK = 0.5   # share of the largest thickness added to the reach a step needs
-SKIN = 2.0          # thicknesses the search reaches beyond that, so that its list can be kept
+SURFACE_REACH_SLACK = 0.5   # share of the largest thickness added to the reach a step needs
 NO_SELF_CONTACT = -np.inf   # the search distance that finds no pair of one body
 
 
 @kernel
 def kept_surface_pairs(x):
-    """Room for the kept pair list: (the point-triangle and edge-edge pairs, the predicted
-    positions they were found at, the reach they were found with: none yet)."""
+    """Room for the kept pair list, none found yet (a SolvePairList)."""
     pairs = List()
     pairs.append(np.empty((0, 2), np.int64))
     pairs.append(np.empty((0, 2), np.int64))
-    return pairs, np.empty_like(x), np.full(1, -1.0)
+    return SolvePairList(pairs, np.empty_like(x), np.full(1, -1.0))
 
 
 @kernel
@@ -65,19 +63,18 @@ def find_surface_pairs(model, x, v, h, kept):
     for b in range(model.body_thickness.shape[0]):
         thickest = max(thickest, model.body_thickness[b])
     closing = 2.0 * h * velocity_spread(model.surface_points, v)
-    reach = thickest * REACH_SLACK + closing   # beyond each pair's rest distance
+    reach = thickest * SURFACE_REACH_SLACK + closing   # beyond each pair's rest distance
     predicted = np.empty_like(x)
     for i in range(x.shape[0]):
         for c in range(3):
             predicted[i, c] = x[i, c] + h * v[i, c]
-    pairs, found_at, found_reach = kept
-    if reach + 2.0 * spread_since(model.surface_points, predicted, found_at) <= found_reach[0]:
-        return pairs[0], pairs[1]
-    found_reach[0] = reach + SKIN * thickest
+    if reach + 2.0 * spread_since(model.surface_points, predicted, kept.found_at) <= kept.reach[0]:
+        return kept.pairs[0], kept.pairs[1]
+    kept.reach[0] = reach + SKIN * thickest
     # a body's own folds are left to the post-step pass (module doc): no pair of one body
-    points, edges = surface_pairs(model, predicted, found_reach[0], NO_SELF_CONTACT)
-    pairs[0], pairs[1] = points, edges
-    found_at[:] = predicted
+    points, edges = surface_pairs(model, predicted, kept.reach[0], NO_SELF_CONTACT)
+    kept.pairs[0], kept.pairs[1] = points, edges
+    kept.found_at[:] = predicted
     return points, edges
 
 

@@ -1,6 +1,6 @@
 """A backward Euler step that carries a surface through another is taken again in halves.
 
-The solve's contacts are penalty springs (surface_contact.py, own_contact.py): stiff, but not
+The solve's contacts are penalty springs (pair_lists/solve_pairs.py, pair_lists/own_pairs.py): stiff, but not
 hard. A heavy load met within one large step can press them past what they hold: a 128 kg
 cube dropped at 5 m/s onto a cloth folded in half pushed the top layer through the bottom one
 at its corners in 8 of 12 runs at 1/60 and 1/30 s, while at 1/120 and 1/240 s none crossed
@@ -13,7 +13,7 @@ cannot hold at any step), halving does not help, and the step is taken whole fro
 it would be without the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part,
 threw itself 10 m up, where taken whole it stays down, crossed as it was without the check. So
 a step never loops, and one that halving cannot help ends as without it (but for the solve's
-own pair list, surface_contact.py, which a rejected part may have renewed and which is not put
+own pair list, pair_lists/solve_pairs.py, which a rejected part may have renewed and which is not put
 back: a list kept longer only holds more candidates, farther than the solve's reach), at the
 cost of the parts it tried: seven steps' work where no part passes, more where some pass before
 one fails. A step that crosses nothing is taken as before, bit for bit, at the cost of the check
@@ -31,24 +31,31 @@ that passes back out does, so a tangled cloth pays for halvings that cannot help
 pass through and back within one step (the volume's sign is the same at both ends), a pair whose
 volume changes sign more than once (the bisection finds one of the moments), a pair carried out
 of the lists' reach by the end of the step (beyond its rest distance plus the skin,
-surface_collisions.py), and neighbours along a surface edge, which self-contact leaves out (a
+collision/pipeline.py), and neighbours along a surface edge, which self-contact leaves out (a
 cloth folded sharply along a line can still cross itself there: a 32 kg cube at 10 m/s did, in 2
 of 6 runs at 1/60 s).
 """
-import math
-
 import numpy as np
 
-from .._jit import kernel
-from ..proximity import edge_distance, point_triangle_distance
-from ..surface_collisions import pairs_at
-from .own_contact import any_self_collision
+from ..._jit import kernel
+from ..distance.closest_points import edge_distance, point_triangle_distance
+from ..pair_lists.keeping import pairs_at
+from ..pair_lists.own_pairs import any_self_collision
+
 
 MOST_HALVINGS = 6   # a step is cut into parts down to 1 / 2^MOST_HALVINGS of it
+
+
 PASS_TOLERANCE = 0.25   # of the rest distance: how near, where coplanar, counts as through
+
+
 BISECTIONS = 30   # halvings of the step that find where four points are coplanar
-# the four points where they are coplanar, as proximity's helpers read them
+
+
+# the four points where they are coplanar, as closest_points.py reads them
 ONE_TRIANGLE = np.array([[0, 1, 2]])   # a triangle (rows 0, 1, 2) and a point (row 3)
+
+
 TWO_EDGES = np.array([[0, 1], [2, 3]])
 
 
@@ -56,16 +63,17 @@ TWO_EDGES = np.array([[0, 1], [2, 3]])
 def carried_through(model, start, x, pairs, kept):
     """Whether the step from ``start`` to ``x`` carried a point through a triangle or an edge
     past an edge (module doc): a pair of the solve's list ``kept``
-    (surface_contact.kept_surface_pairs) or, for a self-colliding body, of the post-step list
+    (solve_pairs.kept_surface_pairs) or, for a self-colliding body, of the post-step list
     ``pairs`` where it holds at x, else of one renewed there (only for the check: the step
     hands on its own list, so the post-step pass keeps or renews it as before)."""
-    if any_passed(model, start, x, kept[0][0], True) or any_passed(model, start, x, kept[0][1],
-                                                                     False):
+    if any_passed(model, start, x, kept.pairs[0], True) \
+            or any_passed(model, start, x, kept.pairs[1], False):
         return True
     if not any_self_collision(model):
         return False
     own = pairs_at(model, x, pairs)
-    return any_passed(model, start, x, own[0], True) or any_passed(model, start, x, own[1], False)
+    return any_passed(model, start, x, own.points, True) \
+        or any_passed(model, start, x, own.edges, False)
 
 
 @kernel

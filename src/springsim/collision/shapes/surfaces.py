@@ -1,6 +1,6 @@
 """The shapes that touch in body-body contact, gathered from the bodies when the model is built.
 
-Every body with a surface (bodies/surface_contact.SurfaceContact) gives
+Every body with a surface (collision/shapes/settings.py.SurfaceContact) gives
 - its collision triangles: its surface, or for a mesh body (whose drawn surface rides the
   lattice) the boundary faces of its lattice (``BuiltBody.collision_surface``);
 - as points, the particles at their corners (a cube's interior particles never touch first);
@@ -11,8 +11,8 @@ bodies without surfaces): then the contact pass costs nothing.
 """
 import numpy as np
 
-from .bodies.surface_contact import SurfaceContact
-from .unfolded_sheet import no_sheet, unfolded_sheet_arrays
+from ..pair_lists.unfolded_sheet import no_sheet, unfolded_sheet_arrays
+from .settings import SurfaceContact
 
 
 def surface_contact_arrays(specs, built, offsets) -> dict:

@@ -1,8 +1,8 @@
-"""Broad phase of surface contact: the (point, triangle) and (edge, edge) pairs that may touch.
+"""The surfaces' broad phase: the (point, triangle) and (edge, edge) pairs that may touch.
 
 Every triangle's and edge's bounding box, grown by the search ``reach``, goes into a uniform grid
 whose cells are a third as wide as the largest grown box (CELLS_PER_BOX), each box in the one
-cell of its low corner (the ball grid of broadphase.py is sized from the largest ball instead).
+cell of its low corner (grid.box_grid).
 A point looks for the boxes that hold it in the cells from which a box can reach it (its own and
 up to 3 below it along each axis); an edge, for the boxes that overlap its own, likewise. Each
 pair is met once. The grid is rebuilt from the positions on every call, a counting sort by
@@ -11,22 +11,15 @@ cell; the cost grows like the shapes' count, not their product.
 Which pairs count: a point and a triangle, or two edges, of two bodies; or of one body that
 collides with itself, leaving out a point and a triangle with a corner that is the point or its
 neighbour along a surface edge, and two edges with ends that are the same or neighbours
-(contact_shapes.neighbour_arrays says why).
+(shapes/surfaces.neighbour_arrays says why).
 Pairs come sorted (point, then triangle; lower edge, then higher), so the narrow phase sees them
 in one canonical order however the grid is laid out.
 """
-import math
-
 import numpy as np
 
-from ._jit import kernel
-from .broadphase import MAX_CELLS_PER_PARTICLE, cell_coordinate, grid_cell_size
-from .geometry import closest_on_segments, closest_on_triangle
-
-GRID_CELLS = 65536    # cells a search's grid may have whatever the shapes' count (0.5 MB)
-CELLS_PER_BOX = 3.0   # grid cells across the largest box: the searches of a 100 x 100 and a
-                      # 25 x 25 cloth took 0.8 and 0.88 of their time with 1 cell at 2, 0.73
-                      # and 0.82 at 3 (more are capped by MAX_CELLS_PER_PARTICLE there)
+from ..._jit import kernel
+from ..distance.closest_points import point_triangle_distance, edge_distance
+from .grid import cell_coordinate, GRID_CELLS, box_grid, region_cells
 
 
 @kernel
@@ -58,71 +51,6 @@ def shape_boxes(x, shapes, reach):
                 low, high = min(low, value), max(high, value)
             boxes[s, c], boxes[s, 3 + c] = low - reach, high + reach
     return boxes
-
-
-@kernel
-def box_grid(boxes, least_cells):
-    """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
-    1 / CELLS_PER_BOX as wide as the largest box (wider where they would be more than
-    MAX_CELLS_PER_PARTICLE a box and ``least_cells``):
-    (origin, cell size, dims, cell_start, members, their boxes, the largest box size along
-    x, y and z); cell (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the
-    boxes members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
-    [low, high] only if its cell lies between those of low - the largest size and high, along
-    each axis (``region_cells``), and each is met once. Why along each axis: a cloth lying
-    flat has boxes as thin as the search's reach across it, and the region then reaches as
-    few cells below it."""
-    count = boxes.shape[0]
-    origin, extent = np.zeros(3), np.zeros(3)
-    largest = np.zeros(3)
-    for c in range(3):
-        low, high = np.inf, -np.inf
-        for b in range(count):
-            low, high = min(low, boxes[b, c]), max(high, boxes[b, 3 + c])
-            largest[c] = max(largest[c], boxes[b, 3 + c] - boxes[b, c])
-        if np.abs(low) < np.inf and np.abs(high) < np.inf:   # else (NaN, inf) one cell
-            origin[c], extent[c] = low, high - low
-        if not largest[c] < np.inf:
-            largest[c] = 1.0
-    # at least GRID_CELLS: a small mesh (cloth-balls's 1,800 edges) had its cells doubled
-    # by the per-box cap once it draped in 3D, and searched 7% slower
-    cell = grid_cell_size(extent, largest.max() / CELLS_PER_BOX,
-                          max(MAX_CELLS_PER_PARTICLE * count, least_cells))
-    dims = np.empty(3, np.int64)
-    for c in range(3):
-        dims[c] = int(extent[c] / cell) + 1
-    home = np.empty(count, np.int64)
-    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
-    for b in range(count):
-        home[b] = ((cell_coordinate(boxes[b, 0], origin[0], cell, dims[0]) * dims[1]
-                    + cell_coordinate(boxes[b, 1], origin[1], cell, dims[1])) * dims[2]
-                   + cell_coordinate(boxes[b, 2], origin[2], cell, dims[2]))
-        cell_start[home[b] + 1] += 1
-    for number in range(1, cell_start.shape[0]):
-        cell_start[number] += cell_start[number - 1]
-    cursor = cell_start[:-1].copy()
-    members = np.empty(count, np.int64)
-    for b in range(count):   # in box order: each cell's members ascend
-        members[cursor[home[b]]] = b
-        cursor[home[b]] += 1
-    # the members' boxes in the same order: a query then reads them from contiguous memory
-    member_boxes = np.empty((count, 6))
-    for k in range(count):
-        for c in range(6):
-            member_boxes[k, c] = boxes[members[k], c]
-    return origin, cell, dims, cell_start, members, member_boxes, largest
-
-
-@kernel
-def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims, largest):
-    """The first and last cell along x, y and z whose boxes (box_grid) may overlap the region
-    [low, high] (``largest``: the largest box size along each axis)."""
-    return (cell_coordinate(low0 - largest[0], origin[0], cell, dims[0]),
-            cell_coordinate(high0, origin[0], cell, dims[0]),
-            cell_coordinate(low1 - largest[1], origin[1], cell, dims[1]),
-            cell_coordinate(high1, origin[1], cell, dims[1]),
-            cell_coordinate(low2 - largest[2], origin[2], cell, dims[2]),
-            cell_coordinate(high2, origin[2], cell, dims[2]))
 
 
 @kernel
@@ -265,30 +193,6 @@ def search_distance(body, thickness, p, q, beyond, self_beyond):
     ``self_beyond`` on one body."""
     rest = 0.5 * (thickness[body[p]] + thickness[body[q]])
     return rest + (self_beyond if body[p] == body[q] else beyond)
-
-
-@kernel
-def point_triangle_distance(x, triangles, p, t, corners):
-    """The distance (m) from particle p to triangle t (``corners``: work space)."""
-    for k in range(3):
-        for c in range(3):
-            corners[k, c] = x[triangles[t, k], c]
-    w0, w1, w2 = closest_on_triangle(x[p], corners)
-    total = 0.0
-    for c in range(3):
-        total += (x[p, c] - w0 * corners[0, c] - w1 * corners[1, c] - w2 * corners[2, c]) ** 2
-    return math.sqrt(total)
-
-
-@kernel
-def edge_distance(x, edges, e, f):
-    """The distance (m) between edges e and f."""
-    a, b, c, d = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
-    s, t = closest_on_segments(x[a], x[b], x[c], x[d])
-    total = 0.0
-    for k in range(3):
-        total += ((1.0 - s) * x[a, k] + s * x[b, k] - (1.0 - t) * x[c, k] - t * x[d, k]) ** 2
-    return math.sqrt(total)
 
 
 @kernel

@@ -1,11 +1,11 @@
 """A self-colliding body's own pairs among backward Euler's contacts: those in contact at the
 step's start and, as the Newton estimates show them, those the step brings into contact.
 
-Why not searched like the pairs of two bodies (surface_contact.py): searched with the step's
-reach, a 100 x 100 cloth hanging at 1/60 s ran at 1.5 steps/s instead of 67 (every particle
-within a few thicknesses of hundreds of its own triangles), and a cloth hit by a 20 m/s ball at
-1/30 s had hundreds of its own pairs, passing by rather than through each other, taken for
-crossings, which threw the ball 13 m up. So the solve takes only the own pairs closer than
+Why not searched like the pairs of two bodies (solve_pairs.py): searched with the step's
+reach, a hanging cloth finds every particle within a few thicknesses of hundreds of its own
+triangles (a step then costs tens of times more), and a cloth hit by a fast ball has hundreds of
+its own pairs passing by rather than through each other, which taken for crossings threw the
+ball up. So the solve takes only the own pairs closer than
 their thickness: at the step's start (a fold lying on itself), and at the end of each solve,
 x + h (v + dv) (a fold pressed shut within the step: a heavy cube dropped at 5 m/s onto a
 folded cloth pushed one layer through the other with the start's pairs alone); where a solve
@@ -14,20 +14,30 @@ from where it started (MOST_OWN_REDOS times at most). Why again rather than one 
 iteration more: relinearized about an estimate with a layer pushed through, the next
 iterations drove that cube's step to 21 m/s and tangled the cloth for good.
 
-Which pairs: those of the post-step pass's list (surface_collisions.py) where it still holds
+Which pairs: those of the post-step pass's list (collision/pipeline.py) where it still holds
 at those positions, else of a list renewed there. Either holds every pair in contact, so the
 set, sorted, does not depend on when or how a list was found: a run resumed from a saved
 state steps bit for bit as the one that went on (the farther pairs a list may also hold did
 not: 6 mm after one step of a folded cloth pressed by a cube, a copy of the state against the
 run).
 """
+from typing import NamedTuple
+
 import numpy as np
 
-from .._jit import kernel
-from ..proximity import edge_distance, point_triangle_distance
-from ..surface_collisions import pairs_at
+from ..._jit import kernel
+from ..distance.closest_points import edge_distance, point_triangle_distance
+from .keeping import pairs_at
+
 
 MOST_OWN_REDOS = 4   # times a step may solve a Newton iteration again for its own pairs
+
+
+class OwnPairs(NamedTuple):
+    """A self-colliding body's own pairs in contact, each sorted and listed once."""
+
+    points: np.ndarray   # (K, 2) int64: (surface particle, surface triangle row)
+    edges: np.ndarray    # (L, 2) int64: (edge row, edge row)
 
 
 @kernel
@@ -38,15 +48,16 @@ def any_self_collision(model):
 
 @kernel
 def own_pairs_touching(model, x, pairs):
-    """(point-triangle pairs, edge-edge pairs) of one body closer than its thickness at x,
-    sorted, and the list they came from: ``pairs`` where it holds at x, else one renewed
-    there (which the step hands on to the post-step pass: the renewal is not paid twice)."""
+    """(the pairs of one body closer than its thickness at x: OwnPairs, the list they came
+    from: ``pairs`` where it holds at x, else one renewed there, which the step hands on to the
+    post-step pass, so that the renewal is not paid twice)."""
     if not any_self_collision(model):
-        return np.empty((0, 2), np.int64), np.empty((0, 2), np.int64), pairs
+        return OwnPairs(np.empty((0, 2), np.int64), np.empty((0, 2), np.int64)), pairs
     pairs = pairs_at(model, x, pairs)
-    return (sorted_rows(own_touching(model, x, pairs[0], True), model.surface_triangles.shape[0]),
-            sorted_rows(own_touching(model, x, pairs[1], False), model.surface_edges.shape[0]),
-            pairs)
+    points = own_touching(model, x, pairs.points, True)
+    edges = own_touching(model, x, pairs.edges, False)
+    return OwnPairs(sorted_rows(points, model.surface_triangles.shape[0]),
+                    sorted_rows(edges, model.surface_edges.shape[0])), pairs
 
 
 @kernel
@@ -82,12 +93,12 @@ def sorted_rows(rows, base):
 
 
 @kernel
-def grown_own_pairs(model, x_k, pairs, own_points, own_edges):
-    """(own point pairs, own edge pairs, whether they grew, the list at x_k): those given and
-    those in contact at the estimate x_k (own_pairs_touching)."""
-    more_points, more_edges, pairs = own_pairs_touching(model, x_k, pairs)
-    points = sorted_rows(np.concatenate((own_points, more_points)),
+def grown_own_pairs(model, x_k, pairs, own):
+    """(OwnPairs: ``own`` and those in contact at the estimate x_k (own_pairs_touching),
+    whether they grew, the list at x_k)."""
+    more, pairs = own_pairs_touching(model, x_k, pairs)
+    points = sorted_rows(np.concatenate((own.points, more.points)),
                          model.surface_triangles.shape[0])
-    edges = sorted_rows(np.concatenate((own_edges, more_edges)), model.surface_edges.shape[0])
-    grew = points.shape[0] > own_points.shape[0] or edges.shape[0] > own_edges.shape[0]
-    return points, edges, grew, pairs
+    edges = sorted_rows(np.concatenate((own.edges, more.edges)), model.surface_edges.shape[0])
+    grew = points.shape[0] > own.points.shape[0] or edges.shape[0] > own.edges.shape[0]
+    return OwnPairs(points, edges), grew, pairs

@@ -29,12 +29,11 @@ How contact enters an integrator, and why:
 """
 import math
 
+from numba import prange
 import numpy as np
 
-from numba import prange
-
-from ._jit import inline_kernel, kernel
-from .terrains import terrain_distance, terrain_looks_ahead
+from ..._jit import inline_kernel, kernel
+from ...terrains import terrain_distance, terrain_looks_ahead
 
 
 BLOCK = 64   # particles whose terrain distances are looked up together (see apply_contact_forces)
@@ -47,12 +46,12 @@ def apply_contact_forces(model, x, v, h, a):
     With a terrain kind whose lookup is long (a mesh's grid: an index, eight loads, the
     interpolation and a square root, one after the other) the particles go a block at a time
     (apply_contact_forces_in_blocks); otherwise one by one, which is faster for short lookups
-    (blocks cost the plane about 10% in benchmarks/mesh_terrain.py). One by one, the particles
+    (benchmarks/mesh_terrain.py compares both). One by one, the particles
     are independent, so a threaded kernel (integrators.KernelIntegrator) shares them among its
     threads, with the same results (this is inlined for that: a kernel's loops run on threads
     only in the kernel compiled with them); blocks run serially. The contact arithmetic is
     written out in both loops: moved into an inline kernel taking a and v, it made the plane's
-    contact five times slower (28 ns a particle: references counted per call), and into a kernel
+    contact several times slower (references counted per call), and into a kernel
     on scalars 1.5 times."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
     blocks = False
@@ -92,7 +91,7 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
     """apply_contact_forces, a block of particles at a time: the terrains whose lookup is long
     are looked up for the whole block before its contact, so that the processor overlaps the
     lookups of many particles instead of stalling the contact arithmetic behind each one (a
-    mesh floor's contact: 22 -> 16 ns a particle in benchmarks/mesh_terrain.py). A particle
+    mesh floor's contact: benchmarks/mesh_terrain.py). A particle
     meets the terrains in the same order as one by one, so the results are the same."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
     found = np.empty((BLOCK, 4))

@@ -1,8 +1,8 @@
 """How a body's surface touches other bodies and itself: the keys every deformable body has.
 
 A body with a surface (cube, cloth, mesh body) collides with every other such body, by default:
-each of its surface particles against the other body's surface triangles (contact.py's pipeline:
-surface_contact.py, proximity.py). ``thickness`` (m) is how far apart the surfaces are kept: a
+each of its surface particles against the other body's surface triangles (the collision
+pipeline: springsim.collision). ``thickness`` (m) is how far apart the surfaces are kept: a
 particle and a triangle of two bodies are kept the mean of their thicknesses apart, those of one
 self-colliding body its thickness. A pair's friction and restitution are the means of the two
 bodies' values. Balls are in the same contact pass but touch every particle (as a point), with
@@ -10,7 +10,8 @@ their own keys (balls.py).
 """
 from dataclasses import dataclass
 
-from ..errors import is_finite, require
+from ...errors import is_finite, require
+
 
 MAX_THICKNESS = 1.0   # m: beyond, contact would act across whole bodies (and search far)
 

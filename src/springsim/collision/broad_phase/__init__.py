@@ -1,0 +1,3 @@
+"""Broad phase: the pairs that may touch, found without testing every pair (grid.py, the uniform
+grid both searches use; balls.py; surfaces.py).
+"""

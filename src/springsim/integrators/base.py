@@ -1,0 +1,89 @@
+"""What every integrator is: the ``Integrator`` interface, and the registry that names them.
+
+Adding an integrator is one new file in this package that defines an ``Integrator`` subclass
+decorated with ``@register``, plus its import line in ``__init__.py``. The registry lives here,
+not in the package's ``__init__``, so that a method's file imports nothing that imports it back.
+"""
+import numba
+
+from ..errors import SceneError
+from ..spring_runs import partition_count
+
+REGISTRY: dict[str, type] = {}
+
+
+class Integrator:
+    """Advances a state by whole steps of size dt; subclasses set ``name``, ``order``, ``summary``.
+
+    ``advance(model, state, dt, steps, threads)`` returns ``(steps_done, particle)`` where
+    ``particle`` is the first particle found diverging after step ``steps_done`` (and -1 if none
+    did). ``threads`` is the most threads it may use. Everything a step reads of the steps
+    before it is in the state (state.State), so an integrator holds only what it derives from
+    the model (``model_cache``).
+    """
+
+    name = ""
+    order = 0
+    summary = ""
+    _kept_for = None   # the model whose things are kept (model_cache)
+
+    def __init__(self, **options):
+        if options:
+            key = next(iter(options))
+            raise SceneError(f"integrator option {key}", options[key],
+                             f"'{self.name}' takes no options")
+
+    def advance(self, model, state, dt: float, steps: int, threads: int = 1) -> tuple[int, int]:
+        raise NotImplementedError  # every registered integrator overrides this
+
+    def model_cache(self, model) -> dict:
+        """What this integrator derives from ``model`` and keeps between calls (a solve's
+        layout); a new model (a Simulation rebuilt by an edit) starts with nothing."""
+        if self._kept_for is not model:
+            self._kept_for, self._kept = model, {}
+        return self._kept
+
+
+class KernelIntegrator(Integrator):
+    """An integrator whose whole loop of steps is one compiled kernel
+    ``kernel(model_arrays, x, v, dt, steps, pairs) -> (steps_done, particle, pairs)`` (pairs:
+    the state's surface pair list, returned as the last step left it), and the same compiled
+    with its loops on threads, ``parallel_kernel``.
+
+    Which one runs depends on the model's size alone (spring_runs.partition_count): a model
+    whose force loop has one partition (under 131,072 particles) runs serially, since starting
+    threads for every loop costs more than it saves there; a larger one runs the threaded kernel
+    with ``threads`` threads, one thread included, so that its results do not depend on the
+    number of threads (spring_runs.py: bit-identical for any count)."""
+
+    kernel = None
+    parallel_kernel = None
+
+    def advance(self, model, state, dt, steps, threads=1):
+        kernel = self.kernel
+        if partition_count(model.particle_count) > 1:
+            numba.set_num_threads(threads)
+            kernel = self.parallel_kernel
+        done, particle, state.pairs = kernel(model.arrays, state.positions, state.velocities,
+                                             float(dt), int(steps), state.pairs)
+        return int(done), int(particle)
+
+
+def available_threads() -> int:
+    """The most threads a simulation can use: the machine's cores (or NUMBA_NUM_THREADS)."""
+    return numba.config.NUMBA_NUM_THREADS
+
+
+def register(cls):
+    REGISTRY[cls.name] = cls
+    return cls
+
+
+def integrator_names() -> list[str]:
+    return list(REGISTRY)
+
+
+def get_integrator(name: str, **options) -> Integrator:
+    if name not in REGISTRY:
+        raise SceneError("integrator", name, "must be one of " + ", ".join(REGISTRY))
+    return REGISTRY[name](**options)
