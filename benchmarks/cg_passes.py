@@ -56,7 +56,7 @@ def main():
     kind, normal = simulation.state.contacts[0], np.zeros_like(x)
     rng = np.random.default_rng(1)
     s, c, q = rng.standard_normal(x.shape), rng.standard_normal(x.shape), np.empty_like(x)
-    arguments = (layout.diagonal, blocks, terms, no_ball_contacts(), kind, normal, s)
+    arguments = (layout.diagonal, blocks, terms, no_contacts(), kind, normal, s)
     best = {}
     for name, way in (("fused", fused), ("separate", separate)):
         way(1, *arguments, c.copy(), q)   # compile

@@ -128,3 +128,21 @@ def test_read_only_arrays_and_a_foreign_contact_memory_are_refused():
     simulation.state.contacts = contacts
     simulation.step(1)
     assert simulation.steps_taken == 1
+
+
+def test_a_pair_list_that_numbers_shapes_the_model_lacks_is_refused():
+    """The kernels trust a pair list's rows: one naming a triangle or an edge past the model's,
+    or of another dtype, is refused before the step (it would be read past an array's end)."""
+    simulation = springsim.Simulation(springsim.load_scene("jelly-stack"), dt=1e-3)
+    simulation.step(1)
+    pairs = simulation.state.pairs
+    triangles = len(simulation.model.arrays.surface_triangles)
+    simulation.state.pairs = pairs._replace(points=np.array([[0, triangles]], np.int64))
+    refused(lambda: simulation.step(1), "state.pairs.points")
+    simulation.state.pairs = pairs._replace(edges=np.zeros((1, 2), np.int32))
+    refused(lambda: simulation.step(1), "state.pairs.edges")
+    simulation.state.pairs = (pairs.points, pairs.edges)
+    refused(lambda: simulation.step(1), "state.pairs")
+    simulation.state.pairs = pairs
+    simulation.step(1)
+    assert simulation.steps_taken == 2

@@ -167,7 +167,7 @@ def test_the_fused_search_product_is_the_filtered_product_of_the_assembled_matri
     s, c = rng.standard_normal((count, 3)), rng.standard_normal((count, 3))
     q = np.empty((count, 3))
     expected_c = s + 0.7 * c
-    curvature = search_product(layout.diagonal, blocks, terms, no_ball_contacts(), kind, normal,
+    curvature = search_product(layout.diagonal, blocks, terms, no_contacts(), kind, normal,
                                s, 0.7, c, q)
     expected_q = (matrix @ expected_c.ravel()).reshape(-1, 3)
     expected_q[kind == PINNED] = 0.0

@@ -2,12 +2,12 @@
 never stopped.
 
 A state file (``Simulation.save_state``) holds the whole State: positions, velocities, time, the
-steps taken, implicit_euler's contact memory and the surface pair lists. A checkpoint (``springsim run
---checkpoint-every``) holds, besides the state, everything the rest of the run depends on: the
-run's arguments, its scene written out as a scene file (so a later edit of the scene file cannot
-change a resumed run) and the frames recorded so far. Both are NPZ files written whole or not at
-all, with a format name and version checked on load, so that a wrong or foreign file is refused
-with one line.
+steps taken, implicit_euler's contact memory and the surface pair lists. A checkpoint
+(``springsim run --checkpoint-every``) holds, besides the state, everything the rest of the run
+depends on: the run's arguments, its scene written out as a scene file (so a later edit of the
+scene file cannot change a resumed run) and the frames recorded so far. Both are NPZ files
+written whole or not at all, with a format name and version checked on load, so that a wrong or
+foreign file is refused with one line.
 """
 import json
 import os

@@ -56,9 +56,9 @@ def add_loose_spring_forces(model, x, v, force):
 def accelerations(model, x, v, h, out, columns):
     """out = dv/dt at (x, v): internal and external forces over mass, then terrain contact.
 
-    ``h`` is the step the integrator is taking; static friction uses it (see collision/response/terrain.py).
-    ``columns`` is work space from force_columns. Pinned particles have zero inverse mass and so
-    zero acceleration.
+    ``h`` is the step the integrator is taking; static friction uses it (see
+    collision/response/terrain.py). ``columns`` is work space from force_columns. Pinned particles
+    have zero inverse mass and so zero acceleration.
     """
     free_accelerations(model, x, v, out, columns)
     apply_contact_forces(model, x, v, h, out)

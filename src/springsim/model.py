@@ -50,8 +50,8 @@ class ModelArrays(NamedTuple):
     sheet_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T, 3) particle numbers
     triangle_start: np.ndarray = np.zeros(1, np.int64)        # (P + 1,) into particle_triangles
     particle_triangles: np.ndarray = np.empty(0, np.int64)    # (3T,) rows of sheet_triangles
-    # Body-body contact of surfaces (collision/shapes/surfaces.py, collision/pipeline.py); empty when no
-    # two surfaces can touch
+    # Body-body contact of surfaces (collision/shapes/surfaces.py, collision/pipeline.py); empty
+    # when no two surfaces can touch
     particle_body: np.ndarray = np.empty(0, np.int64)         # (P,) the body of each particle
     surface_points: np.ndarray = np.empty(0, np.int64)        # (Q,) particles on a surface
     surface_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T,) particle numbers
@@ -63,8 +63,8 @@ class ModelArrays(NamedTuple):
     body_friction: np.ndarray = np.empty(0)                   # (B,) kinetic Coulomb coefficient
     body_static_friction: np.ndarray = np.empty(0)            # (B,)
     body_restitution: np.ndarray = np.empty(0)                # (B,)
-    # One self-colliding sheet (collision/pair_lists/unfolded_sheet.py; empty otherwise): each particle's ring edges,
-    # the boundary edges, the particles near them
+    # One self-colliding sheet (collision/pair_lists/unfolded_sheet.py; empty otherwise): each
+    # particle's ring edges, the boundary edges, the particles near them
     sheet_ring_start: np.ndarray = np.zeros(1, np.int64)      # (P + 1,) into sheet_ring_edges
     sheet_ring_edges: np.ndarray = np.empty((0, 2), np.int32)  # (R, 2) particle numbers
     sheet_boundary: np.ndarray = np.empty((0, 2), np.int64)   # (G, 2) directed along it

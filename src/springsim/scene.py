@@ -10,6 +10,7 @@ import numpy as np
 from .collision.shapes.settings import SurfaceContact
 from .errors import is_finite, require
 from .sampling import check_duration
+from .scene_values import check_values
 from .sizes import check_scene_size
 
 
@@ -25,8 +26,9 @@ class ImplicitSettings:
 @dataclass
 class Scene:
     name: str = "custom"
-    bodies: list = field(default_factory=list)
-    terrains: list = field(default_factory=list)
+    # tables each with a ``type`` (scene_values.TYPED_LISTS)
+    bodies: list = field(default_factory=list, metadata={"typed_list": True})
+    terrains: list = field(default_factory=list, metadata={"typed_list": True})
     integrator: str = "rk4"
     dt: float = 0.001                     # s
     duration: float = 8.0                 # s, how long `springsim run` simulates
@@ -36,7 +38,6 @@ class Scene:
 
     def validate(self) -> None:
         from .integrators import integrator_names
-        from .scenefile import check_values
 
         check_values(self)   # kinds and finite numbers, as a scene file's values are checked
         require(self.integrator in integrator_names(), "integrator", self.integrator,

@@ -25,8 +25,8 @@ class BuiltBody:
     # (n,) m: how far the body's surface reaches beyond each particle, kept clear of terrains
     # (mesh bodies; None: the contact radius, zero for points)
     terrain_offsets: np.ndarray | None = None
-    # (c, 3) triangles of particle numbers that other bodies touch (collision/shapes/surfaces.py; None: the
-    # surface, when it is not embedded)
+    # (c, 3) triangles of particle numbers that other bodies touch (collision/shapes/surfaces.py;
+    # None: the surface, when it is not embedded)
     collision_surface: np.ndarray | None = None
 
 

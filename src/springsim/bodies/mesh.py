@@ -14,18 +14,18 @@ the cube's springs, with the mesh's own surface riding the lattice.
   the surface is the input mesh to round-off either way. A vertex farther than one spacing from
   every full cell lies in a part too thin for the lattice; a warning says how many.
 - Contact: terrains push on the particles, and the surface reaches up to about a spacing beyond
-  the outer ones. Each particle therefore keeps a terrain at the distance of the farthest
-  surface vertex for which it is the nearest corner of its cell (its ``terrain_offsets``), as a
-  ball keeps its radius: every vertex lies within that distance of a particle that stays that far
-  from the terrain, so no vertex of a body at rest goes below it. Where the surface passes
-  through the particles (a box), the offsets are zero.
-  Other bodies (body-body contact, collision/shapes/surfaces.py) touch a mesh body through the boundary
-  faces of its lattice, kept ``thickness`` apart as any surface: the faces of full cells whose
-  neighbour across the face is not full, two triangles each (``collision_surface``,
-  lattice_boundary). That boundary lies within about a spacing inside the drawn surface (on it
-  for a box), so another body may be seen to sink up to about a spacing into the drawn mesh.
-  Particles that are a corner of no full cell (thin parts, and some points just inside a curved
-  surface) are on no such face: they are not touched by other bodies.
+  the outer ones. Each particle therefore keeps a terrain at the distance of the farthest surface
+  vertex for which it is the nearest corner of its cell (its ``terrain_offsets``), as a ball keeps
+  its radius: every vertex lies within that distance of a particle that stays that far from the
+  terrain, so no vertex of a body at rest goes below it. Where the surface passes through the
+  particles (a box), the offsets are zero. Other bodies (body-body contact,
+  collision/shapes/surfaces.py) touch a mesh body through the boundary faces of its lattice, kept
+  ``thickness`` apart as any surface: the faces of full cells whose neighbour across the face is
+  not full, two triangles each (``collision_surface``, lattice_boundary). That boundary lies within
+  about a spacing inside the drawn surface (on it for a box), so another body may be seen to sink
+  up to about a spacing into the drawn mesh. Particles that are a corner of no full cell (thin
+  parts, and some points just inside a curved surface) are on no such face: they are not touched by
+  other bodies.
 """
 import functools
 import os

@@ -9,7 +9,7 @@
                    triangle) and (edge, edge) pairs within a reach
         |
     pair_lists/    surface pairs kept between steps (a Verlet list: keeping.py) and the proofs
-                   that let a list be kept or skip a search (collision/pair_lists/rigid_pieces.py, collision/pair_lists/unfolded_sheet.py);
+                   that let a list be kept or skip a search (rigid_pieces.py, unfolded_sheet.py);
                    the implicit solve's own lists (solve_pairs.py: pairs of two bodies within a
                    step's reach; own_pairs.py: a self-colliding body's pairs in contact)
         |

@@ -37,7 +37,8 @@ def resolve_contacts(model, x, v, start, pairs):
 
 @kernel
 def ball_pairs(x, radius, balls, ball_slot):
-    """The (ball, partner) pairs that overlap (broad_phase/balls.find_contacts; none without balls)."""
+    """The (ball, partner) pairs that overlap (broad_phase/balls.find_contacts; none without
+    balls)."""
     if balls.shape[0] == 0:
         return np.empty((0, 2), np.int64)
     return find_contacts(x, radius, balls, ball_slot)

@@ -10,10 +10,10 @@ Contact, as collision/response/terrain.py does it but for a whole implicit step:
   what keeps large steps honest: a particle falling 0.4 m per step would otherwise be driven deep
   into the terrain by the solve and then lifted out alone, crushing the lattice above it.
 - A contact's normal velocity at the end of the step is held at a floor v'_n = bound:
-  outside the band, bound = -phi/h: it may end the step on the surface, not beyond;
-  in the band, bound = max(min(v_n, 0), -phi/h): the terrain cancels the forces that would push
-  the particle in (as collision/response/terrain.py does), stops it at the surface, and lets a leaving particle slow
-  down but not turn back into the terrain. The solve therefore never moves a particle into a
+  outside the band, bound = -phi/h: it may end the step on the surface, not beyond; in the band,
+  bound = max(min(v_n, 0), -phi/h): the terrain cancels the forces that would push the particle in
+  (as collision/response/terrain.py does), stops it at the surface, and lets a leaving particle
+  slow down but not turn back into the terrain. The solve therefore never moves a particle into a
   terrain.
 - Coulomb friction is part of the solve, so that the springs feel it in the same step (applied
   afterwards, it would hold a contact still while the springs carry the rest of the body on, and
@@ -33,7 +33,7 @@ Contact, as collision/response/terrain.py does it but for a whole implicit step:
   give the step's starting velocity more than the Coulomb impulse (a held body set sliding) is
   lowered to it first (``remembered_friction_in_cone``).
 - Restitution is left to the impact pass every integrator runs after its step
-  (``_steps.finish_step``), which reflects whatever normal velocity still approaches a terrain.
+  (``_steps.collide``), which reflects whatever normal velocity still approaches a terrain.
   A contact that the floor slowed down (an impact: it came in faster than the floor allows) ends
   the step on the surface, and gets its approach speed back for that pass to reflect: the
   bounce is e times the speed of the impact, not of the slowed arrival

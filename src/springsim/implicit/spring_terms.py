@@ -1,11 +1,11 @@
 """The springs' off-diagonal blocks of the backward-Euler matrix, applied without being stored.
 
-Every spring s = (a, b) adds a symmetric 3 x 3 block C_s = p l l^T + q I (jacobian.py: p from
-the damper and the stiffness along the spring, q from the stiffness across it) to the diagonal
-blocks (a, a) and (b, b), and -C_s to (a, b) and (b, a). Stored as blocks, the off-diagonal part
-is four 3 x 3 blocks (288 bytes) per spring, and a matrix-vector product streams all of it. Here the solve keeps only the diagonal blocks
-(``pattern.diagonal_pattern``) and, per spring, the five numbers p, q, l (40 bytes), and the
-product adds -C_s u_b to a and -C_s u_a to b itself.
+Every spring s = (a, b) adds a symmetric 3 x 3 block C_s = p l l^T + q I (jacobian.py: p from the
+damper and the stiffness along the spring, q from the stiffness across it) to the diagonal blocks
+(a, a) and (b, b), and -C_s to (a, b) and (b, a). Stored as blocks, the off-diagonal part is four 3
+x 3 blocks (288 bytes) per spring, and a matrix-vector product streams all of it. Here the solve
+keeps only the diagonal blocks (``pattern.diagonal_pattern``) and, per spring, the five numbers p,
+q, l (40 bytes), and the product adds -C_s u_b to a and -C_s u_a to b itself.
 
 The springs are laid out in runs, as the force loop has them (spring_runs.py): along a run both
 ends walk contiguous memory, so the product runs as SIMD code on ``columns`` (u in rows 0-2,

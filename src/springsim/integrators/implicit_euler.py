@@ -10,21 +10,25 @@ solved by Jacobi-preconditioned conjugate gradients. Each further Newton iterati
 (x_k, v_k) = (x + h (v + dv_k), v + dv_k) and solves
     (M - h dF/dv - h^2 dF/dx)(x_k) ddv = h F(x_k, v_k) - M dv_k.
 
-``springsim.implicit`` holds the parts: the Jacobians (and what is left out of them to keep the
-matrix symmetric positive definite) in jacobian.py, the block sparsity pattern, fixed by the
-springs and built once per model, in pattern.py, the filtered solve in cg.py, and pinned
-particles and terrain contact (normal velocity floors, friction inside the solve, restitution)
-as constraints of the solve in constraints.py, and ball-particle contact as stiff one-sided
-penalty springs of the solve in penalty.py: found each step for the pairs the step can bring
-together, added to the matrix-vector products of the solve (the pattern stays fixed), and kept
-or released between solves with the terrain contacts. Without them the solve would pull cloth
-into a ball faster than the post-step correction pushes it out, and at large steps a dropped or
-thrown ball would pass through the cloth. When nothing is constrained, each solve ends with a
-correction along the rigid translations that makes it conserve momentum to rounding, not just to
-the solve's tolerance (cg.py). A step that carries a surface through another (stiff as they
-are, penalty contacts give under a heavy enough load) is taken again in halves
-(collision/ccd/crossing_check.py). After each step the impact and collision passes and the divergence check
-every integrator runs (``_steps.finish_step``).
+``backward_euler_step`` is the method on one screen; the named calls around it are:
+- the system: the Jacobians (and what is left out of them to keep the matrix symmetric positive
+  definite) in implicit/jacobian.py, the block sparsity pattern, fixed by the springs and built
+  once per model, in implicit/pattern.py, the filtered conjugate-gradient solve in implicit/cg.py
+  (when nothing is constrained it conserves momentum to rounding, not just to its tolerance);
+- constraints: pinned particles and terrain contact (normal velocity floors, friction inside
+  the solve, restitution) in implicit/constraints.py;
+- body-body contacts as stiff one-sided penalty springs of the solve, found for the pairs the
+  step can bring together (collision/contact_sets/solve.py), linearized and kept or released
+  between solves with the terrain contacts (collision/response/penalty.py), their friction
+  applied when the solve is done (collision/response/solve_friction.py). Without them the solve
+  pulls cloth into a ball faster than the post-step correction pushes it out;
+- a self-colliding body's own pairs that a solve brings into contact join the contacts, and that
+  Newton iteration is solved again (collision/pair_lists/own_pairs.py);
+- a step that carries a surface through another (stiff as they are, penalty contacts give under
+  a heavy enough load) is taken again in halves (``implicit_euler_step``, with the continuous
+  check of collision/ccd/crossing_check.py).
+After each step come the collision pipeline and the divergence check every integrator runs
+(_steps.drive).
 """
 from typing import NamedTuple
 
@@ -384,12 +388,12 @@ class ImplicitEuler(Integrator):
         for key, value in others.items():
             raise SceneError(f"integrator option {key}", value,
                              f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
-        require(_is_whole(newton_iterations) and newton_iterations >= 1, "implicit.newton_iterations",
-                newton_iterations, "must be a whole number >= 1")
+        require(_is_whole(newton_iterations) and newton_iterations >= 1,
+                "implicit.newton_iterations", newton_iterations, "must be a whole number >= 1")
         require(_is_number(cg_tolerance) and 0 < cg_tolerance < 1, "implicit.cg_tolerance",
                 cg_tolerance, "must be a relative residual in (0, 1)")
-        require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1, "implicit.cg_max_iterations",
-                cg_max_iterations, "must be a whole number >= 1")
+        require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1,
+                "implicit.cg_max_iterations", cg_max_iterations, "must be a whole number >= 1")
         self.newton_iterations = int(newton_iterations)
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)

@@ -8,12 +8,12 @@ Every derivative it takes is known at the start of the step, so it is an explici
 order), not backward Euler; on the course framework's cube its stable range is about half of
 explicit Euler's. Kept to compare with the course framework; ``implicit_euler`` is the real thing.
 
-Terrain contact in the re-evaluation (collision/response/terrain.py) is found at the predicted positions x_p but
-stops the velocity the update changes, v, not v_p: its reaction and static friction are the
-accelerations that stop a velocity within the step, and v' = v + h a. Stopping v_p instead (as
-plain ``accelerations(x_p, v_p)`` would) leaves a resting particle's v' = v - v_p = v, since the
-prediction already stopped v_p: a phantom sliding velocity that never decays while x' = x + h v_p
-stays put (up to 28 mm/s on the jelly cube at rest on the plane).
+Terrain contact in the re-evaluation (collision/response/terrain.py) is found at the predicted
+positions x_p but stops the velocity the update changes, v, not v_p: its reaction and static
+friction are the accelerations that stop a velocity within the step, and v' = v + h a. Stopping v_p
+instead (as plain ``accelerations(x_p, v_p)`` would) leaves a resting particle's v' = v - v_p = v,
+since the prediction already stopped v_p: a phantom sliding velocity that never decays while
+x' = x + h v_p stays put (up to 28 mm/s on the jelly cube at rest on the plane).
 """
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..collision.response.terrain import apply_contact_forces
@@ -38,13 +38,15 @@ def predict_reevaluate_step(model, state, scratch, h, pairs):
 
 @kernel
 def advance(model, x, v, h, steps, pairs):
-    return drive(predict_reevaluate_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
+    return drive(predict_reevaluate_step, model, Motion(x, v), two_stage_scratch(x), h, steps,
+                 pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(predict_reevaluate_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
+    return drive(predict_reevaluate_step, model, Motion(x, v), two_stage_scratch(x), h, steps,
+                 pairs)
 
 
 @register

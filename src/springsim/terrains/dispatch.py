@@ -69,7 +69,8 @@ def looks_ahead_source(kinds) -> str:
 
 def build_looks_ahead(kinds):
     """``terrain_looks_ahead(kind)``: whether the kind's class sets ``look_ahead`` (a long
-    lookup, which the contact kernel does a block of particles ahead; collision/response/terrain.py says why)."""
+    lookup, which the contact kernel does a block of particles ahead; collision/response/terrain.py
+    says why)."""
     namespace = {}
     exec(compile(looks_ahead_source(kinds), FILENAME, "exec"), namespace)
     return njit(inline="always")(namespace["terrain_looks_ahead"])

@@ -146,7 +146,8 @@ class MeshTerrain(Contact):
     resolution: int = 128
 
     distance_kernel = mesh_distance
-    look_ahead = True   # a long lookup: contact does it a block of particles ahead (collision/response/terrain.py)
+    # a long lookup: contact does it a block of particles ahead (collision/response/terrain.py)
+    look_ahead = True
 
     def validate(self, key: str) -> None:
         self.validate_contact(key)

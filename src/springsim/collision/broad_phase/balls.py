@@ -19,7 +19,7 @@ whichever method found them, so that both methods give bit-identical simulations
 import numpy as np
 
 from ..._jit import kernel
-from .grid import MAX_CELLS_PER_PARTICLE, grid_cell_size, cell_number, cell_range
+from .grid import build_grid, cell_range
 
 
 # Above this many ball-particle tests a step, the grid is cheaper than testing every pair.
@@ -154,73 +154,6 @@ def as_pairs(owner, partner, count):
     for k in range(count):
         pairs[k, 0], pairs[k, 1] = owner[k], partner[k]
     return pairs
-
-
-@kernel
-def build_grid(x, members, cell_size):
-    """A uniform grid of the particles ``members``:
-    (origin, cell size, dims, cell_start, sorted members, their positions).
-
-    Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``; its particles are
-    ``members[cell_start[c]:cell_start[c + 1]]`` (ascending), with their positions alongside so
-    that a search reads memory in order. Consecutive z cells are consecutive in memory, so a
-    search reads a whole run of z cells at once.
-    """
-    count = members.shape[0]
-    origin, extent = bounding_box(x, members)
-    cell_size = grid_cell_size(extent, cell_size, MAX_CELLS_PER_PARTICLE * count + 64)
-    dims = np.empty(3, np.int64)
-    for c in range(3):
-        dims[c] = int(extent[c] / cell_size) + 1
-    cell_of = np.empty(count, np.int64)
-    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
-    for k in range(count):
-        i = members[k]
-        cell_of[k] = cell_number(x[i, 0], x[i, 1], x[i, 2], origin, cell_size, dims)
-        cell_start[cell_of[k] + 1] += 1
-    for cell in range(1, cell_start.shape[0]):
-        cell_start[cell] += cell_start[cell - 1]
-    cursor = cell_start[:-1].copy()
-    sorted_members = np.empty(count, np.int64)
-    sorted_x = np.empty((count, 3))
-    for k in range(count):  # in members' order, which keeps each cell's particles ascending
-        slot = cursor[cell_of[k]]
-        cursor[cell_of[k]] += 1
-        i = members[k]
-        sorted_members[slot] = i
-        sorted_x[slot, 0], sorted_x[slot, 1], sorted_x[slot, 2] = x[i, 0], x[i, 1], x[i, 2]
-    return origin, cell_size, dims, cell_start, sorted_members, sorted_x
-
-
-@kernel
-def bounding_box(x, members):
-    """Lowest corner and size (m) of the box around the members' positions.
-
-    NaN positions are left out (every comparison with NaN is false). If a position is infinite
-    the box is too: then the box collapses to a point and the grid to one cell, which stays exact
-    (every member is tested) for the one step before the divergence check stops the simulation.
-    """
-    x_low = y_low = z_low = np.inf
-    x_high = y_high = z_high = -np.inf
-    for i in members:
-        if x[i, 0] < x_low:
-            x_low = x[i, 0]
-        if x[i, 0] > x_high:
-            x_high = x[i, 0]
-        if x[i, 1] < y_low:
-            y_low = x[i, 1]
-        if x[i, 1] > y_high:
-            y_high = x[i, 1]
-        if x[i, 2] < z_low:
-            z_low = x[i, 2]
-        if x[i, 2] > z_high:
-            z_high = x[i, 2]
-    origin = np.array([x_low, y_low, z_low])
-    extent = np.array([x_high - x_low, y_high - y_low, z_high - z_low])
-    for c in range(3):
-        if not (np.abs(origin[c]) < np.inf and extent[c] < np.inf):
-            origin[c] = extent[c] = 0.0
-    return origin, extent
 
 
 @kernel

@@ -4,12 +4,37 @@ Two searches sort what they look up into a grid rebuilt from the positions on ev
 counting sort by cell, so the cost grows like the shapes' count, not their product): the balls'
 grid of points (broad_phase/balls.py), with cells as wide as the largest ball, and ``box_grid``,
 where each grown box of a surface shape lies in the cell of its low corner (surfaces.py,
-collision/pair_lists/unfolded_sheet.py). Both cap their cells per member (MAX_CELLS_PER_PARTICLE): a particle far away
-would otherwise make the grid, and its memory, huge.
+collision/pair_lists/unfolded_sheet.py). Both cap their cells per member (MAX_CELLS_PER_PARTICLE):
+a particle far away would otherwise make the grid, and its memory, huge.
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from ..._jit import kernel
+
+
+class PointGrid(NamedTuple):
+    """Particles sorted by cell (``build_grid``)."""
+
+    origin: np.ndarray      # (3,) m: the low corner of cell (0, 0, 0)
+    cell_size: float        # m
+    dims: np.ndarray        # (3,) int64: cells along x, y and z
+    cell_start: np.ndarray  # (C + 1,) int64: cell c holds members[cell_start[c]:cell_start[c + 1]]
+    members: np.ndarray     # (N,) int64: particle numbers, ascending within each cell
+    member_x: np.ndarray    # (N, 3) m: their positions, in the same order
+
+
+class BoxGrid(NamedTuple):
+    """Boxes sorted by the cell of their low corner (``box_grid``)."""
+
+    origin: np.ndarray        # (3,) m: the low corner of cell (0, 0, 0)
+    cell_size: float          # m
+    dims: np.ndarray          # (3,) int64: cells along x, y and z
+    cell_start: np.ndarray    # (C + 1,) int64: cell c holds members[cell_start[c]:...[c + 1]]
+    members: np.ndarray       # (N,) int64: box numbers, ascending within each cell
+    member_boxes: np.ndarray  # (N, 6) m: their boxes (low x, y, z, high x, y, z), in that order
+    largest: np.ndarray       # (3,) m: the largest box size along x, y and z
 
 
 # The grid never has more cells than this many per particle (a particle far away would otherwise
@@ -71,9 +96,8 @@ def box_grid(boxes, least_cells):
     """A uniform grid of the boxes, each in the one cell that holds its low corner, with cells
     1 / CELLS_PER_BOX as wide as the largest box (wider where they would be more than
     MAX_CELLS_PER_PARTICLE a box and ``least_cells``):
-    (origin, cell size, dims, cell_start, members, their boxes, the largest box size along
-    x, y and z); cell (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the
-    boxes members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
+    a BoxGrid; cell (ix, iy, iz) is number (ix dims[1] + iy) dims[2] + iz and holds the boxes
+    members[cell_start[c]:cell_start[c + 1]], ascending. A box then overlaps a region
     [low, high] only if its cell lies between those of low - the largest size and high, along
     each axis (``region_cells``), and each is met once. Why along each axis: a cloth lying
     flat has boxes as thin as the search's reach across it, and the region then reaches as
@@ -116,7 +140,7 @@ def box_grid(boxes, least_cells):
     for k in range(count):
         for c in range(6):
             member_boxes[k, c] = boxes[members[k], c]
-    return origin, cell, dims, cell_start, members, member_boxes, largest
+    return BoxGrid(origin, cell, dims, cell_start, members, member_boxes, largest)
 
 
 @kernel
@@ -129,3 +153,69 @@ def region_cells(low0, low1, low2, high0, high1, high2, origin, cell, dims, larg
             cell_coordinate(high1, origin[1], cell, dims[1]),
             cell_coordinate(low2 - largest[2], origin[2], cell, dims[2]),
             cell_coordinate(high2, origin[2], cell, dims[2]))
+
+
+@kernel
+def build_grid(x, members, cell_size):
+    """A uniform grid of the particles ``members`` (a PointGrid).
+
+    Cell (ix, iy, iz) is number ``(ix * dims[1] + iy) * dims[2] + iz``; its particles are
+    ``members[cell_start[c]:cell_start[c + 1]]`` (ascending), with their positions alongside so
+    that a search reads memory in order. Consecutive z cells are consecutive in memory, so a
+    search reads a whole run of z cells at once.
+    """
+    count = members.shape[0]
+    origin, extent = bounding_box(x, members)
+    cell_size = grid_cell_size(extent, cell_size, MAX_CELLS_PER_PARTICLE * count + 64)
+    dims = np.empty(3, np.int64)
+    for c in range(3):
+        dims[c] = int(extent[c] / cell_size) + 1
+    cell_of = np.empty(count, np.int64)
+    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
+    for k in range(count):
+        i = members[k]
+        cell_of[k] = cell_number(x[i, 0], x[i, 1], x[i, 2], origin, cell_size, dims)
+        cell_start[cell_of[k] + 1] += 1
+    for cell in range(1, cell_start.shape[0]):
+        cell_start[cell] += cell_start[cell - 1]
+    cursor = cell_start[:-1].copy()
+    sorted_members = np.empty(count, np.int64)
+    sorted_x = np.empty((count, 3))
+    for k in range(count):  # in members' order, which keeps each cell's particles ascending
+        slot = cursor[cell_of[k]]
+        cursor[cell_of[k]] += 1
+        i = members[k]
+        sorted_members[slot] = i
+        sorted_x[slot, 0], sorted_x[slot, 1], sorted_x[slot, 2] = x[i, 0], x[i, 1], x[i, 2]
+    return PointGrid(origin, cell_size, dims, cell_start, sorted_members, sorted_x)
+
+
+@kernel
+def bounding_box(x, members):
+    """Lowest corner and size (m) of the box around the members' positions.
+
+    NaN positions are left out (every comparison with NaN is false). If a position is infinite
+    the box is too: then the box collapses to a point and the grid to one cell, which stays exact
+    (every member is tested) for the one step before the divergence check stops the simulation.
+    """
+    x_low = y_low = z_low = np.inf
+    x_high = y_high = z_high = -np.inf
+    for i in members:
+        if x[i, 0] < x_low:
+            x_low = x[i, 0]
+        if x[i, 0] > x_high:
+            x_high = x[i, 0]
+        if x[i, 1] < y_low:
+            y_low = x[i, 1]
+        if x[i, 1] > y_high:
+            y_high = x[i, 1]
+        if x[i, 2] < z_low:
+            z_low = x[i, 2]
+        if x[i, 2] > z_high:
+            z_high = x[i, 2]
+    origin = np.array([x_low, y_low, z_low])
+    extent = np.array([x_high - x_low, y_high - y_low, z_high - z_low])
+    for c in range(3):
+        if not (np.abs(origin[c]) < np.inf and extent[c] < np.inf):
+            origin[c] = extent[c] = 0.0
+    return origin, extent

@@ -18,7 +18,7 @@ in one canonical order however the grid is laid out.
 import numpy as np
 
 from ..._jit import kernel
-from ..distance.closest_points import point_triangle_distance, edge_distance
+from ..narrow_phase.stencils import edge_distance, point_triangle_distance
 from .grid import cell_coordinate, GRID_CELLS, box_grid, region_cells
 
 
@@ -154,7 +154,8 @@ def collect_edge_keys(model, x, boxes, reach, beyond, self_beyond, grid, keys):
     edge in one cell), so e searches only the cells from its own on (half the region: the
     search of the 100 x 100 cloth visited 2.6 million boxes to find 214,000 that overlap)."""
     origin, cell, dims, cell_start, members, member_boxes, largest = grid
-    edges, body, self_collision = model.surface_edges, model.particle_body, model.body_self_collision
+    edges, body = model.surface_edges, model.particle_body
+    self_collision = model.body_self_collision
     start, neighbours = model.neighbour_start, model.neighbours
     own = np.empty((1, 6))
     count = 0

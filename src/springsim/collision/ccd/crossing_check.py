@@ -1,23 +1,23 @@
 """A backward Euler step that carries a surface through another is taken again in halves.
 
-The solve's contacts are penalty springs (pair_lists/solve_pairs.py, pair_lists/own_pairs.py): stiff, but not
-hard. A heavy load met within one large step can press them past what they hold: a 128 kg
-cube dropped at 5 m/s onto a cloth folded in half pushed the top layer through the bottom one
-at its corners in 8 of 12 runs at 1/60 and 1/30 s, while at 1/120 and 1/240 s none crossed
+The solve's contacts are penalty springs (pair_lists/solve_pairs.py, pair_lists/own_pairs.py):
+stiff, but not hard. A heavy load met within one large step can press them past what they hold: a
+128 kg cube dropped at 5 m/s onto a cloth folded in half pushed the top layer through the bottom
+one at its corners in 8 of 12 runs at 1/60 and 1/30 s, while at 1/120 and 1/240 s none crossed
 (benchmarks/folded_cloth_press.py). So each step is checked for what the post-step pass cannot
-undo, a surface carried through another (``carried_through``), and where it finds one, the
-step is taken again from its start as two steps of half the size, each checked the same way
-(after a half that passes, the steps grow back), down to 1 / 2^MOST_HALVINGS of the step. Where
-even that crosses (a cloth already tangled, passing out as well as in, or a load the contacts
-cannot hold at any step), halving does not help, and the step is taken whole from its start, as
-it would be without the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part,
-threw itself 10 m up, where taken whole it stays down, crossed as it was without the check. So
-a step never loops, and one that halving cannot help ends as without it (but for the solve's
-own pair list, pair_lists/solve_pairs.py, which a rejected part may have renewed and which is not put
-back: a list kept longer only holds more candidates, farther than the solve's reach), at the
-cost of the parts it tried: seven steps' work where no part passes, more where some pass before
-one fails. A step that crosses nothing is taken as before, bit for bit, at the cost of the check
-over the pairs in reach and of copying the state it started from.
+undo, a surface carried through another (``carried_through``), and where it finds one, the step is
+taken again from its start as two steps of half the size, each checked the same way (after a half
+that passes, the steps grow back), down to 1 / 2^MOST_HALVINGS of the step. Where even that crosses
+(a cloth already tangled, passing out as well as in, or a load the contacts cannot hold at any
+step), halving does not help, and the step is taken whole from its start, as it would be without
+the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part, threw itself 10 m up,
+where taken whole it stays down, crossed as it was without the check. So a step never loops, and
+one that halving cannot help ends as without it (but for the solve's own pair list,
+pair_lists/solve_pairs.py, which a rejected part may have renewed and which is not put back: a list
+kept longer only holds more candidates, farther than the solve's reach), at the cost of the parts
+it tried: seven steps' work where no part passes, more where some pass before one fails. A step
+that crosses nothing is taken as before, bit for bit, at the cost of the check over the pairs in
+reach and of copying the state it started from.
 
 What the check sees: the pairs of the surface lists at the step's end (the solve's, which holds
 the pairs of two bodies the step could bring together, and for a self-colliding body the
@@ -38,7 +38,7 @@ of 6 runs at 1/60 s).
 import numpy as np
 
 from ..._jit import kernel
-from ..distance.closest_points import edge_distance, point_triangle_distance
+from ..narrow_phase.stencils import edge_distance, point_triangle_distance
 from ..pair_lists.keeping import pairs_at
 from ..pair_lists.own_pairs import any_self_collision
 

@@ -102,27 +102,3 @@ def area_vector(x, i, j, k):
     ux, uy, uz = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
     wx, wy, wz = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
     return uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
-
-
-@kernel
-def point_triangle_distance(x, triangles, p, t, corners):
-    """The distance (m) from particle p to triangle t (``corners``: work space)."""
-    for k in range(3):
-        for c in range(3):
-            corners[k, c] = x[triangles[t, k], c]
-    w0, w1, w2 = closest_on_triangle(x[p], corners)
-    total = 0.0
-    for c in range(3):
-        total += (x[p, c] - w0 * corners[0, c] - w1 * corners[1, c] - w2 * corners[2, c]) ** 2
-    return math.sqrt(total)
-
-
-@kernel
-def edge_distance(x, edges, e, f):
-    """The distance (m) between edges e and f."""
-    a, b, c, d = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
-    s, t = closest_on_segments(x[a], x[b], x[c], x[d])
-    total = 0.0
-    for k in range(3):
-        total += ((1.0 - s) * x[a, k] + s * x[b, k] - (1.0 - t) * x[c, k] - t * x[d, k]) ** 2
-    return math.sqrt(total)

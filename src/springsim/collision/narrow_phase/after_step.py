@@ -24,7 +24,8 @@ import math
 
 from ..._jit import inline_kernel
 from ..contact_sets import BALL_PASSES
-from ..distance.closest_points import closest_on_segments, closest_on_triangle, triangle_normal
+from ..distance.closest_points import triangle_normal
+from .stencils import edge_edge_stencil, point_triangle_stencil
 
 
 @inline_kernel
@@ -77,10 +78,7 @@ def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, node
             return False
     for i in range(3):
         corners[0, i], corners[1, i], corners[2, i] = x[a, i], x[b, i], x[c, i]
-    w0, w1, w2 = closest_on_triangle(x[p], corners)
-    d0 = x[p, 0] - w0 * x[a, 0] - w1 * x[b, 0] - w2 * x[c, 0]
-    d1 = x[p, 1] - w0 * x[a, 1] - w1 * x[b, 1] - w2 * x[c, 1]
-    d2 = x[p, 2] - w0 * x[a, 2] - w1 * x[b, 2] - w2 * x[c, 2]
+    w0, w1, w2, d0, d1, d2 = point_triangle_stencil(x[p], corners)
     distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     if not distance < 2.0 * rest:   # a point carried through the face: up to a thickness
         return False
@@ -119,12 +117,9 @@ def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weight
         if max(x[a, i], x[b, i]) + rest < min(x[c, i], x[q, i]) \
                 or max(x[c, i], x[q, i]) + rest < min(x[a, i], x[b, i]):
             return False
-    s, t = closest_on_segments(x[a], x[b], x[c], x[q])
+    s, t, d0, d1, d2 = edge_edge_stencil(x[a], x[b], x[c], x[q])
     if not (0.0 < s < 1.0 and 0.0 < t < 1.0):
         return False
-    d0 = (1.0 - s) * x[a, 0] + s * x[b, 0] - (1.0 - t) * x[c, 0] - t * x[q, 0]
-    d1 = (1.0 - s) * x[a, 1] + s * x[b, 1] - (1.0 - t) * x[c, 1] - t * x[q, 1]
-    d2 = (1.0 - s) * x[a, 2] + s * x[b, 2] - (1.0 - t) * x[c, 2] - t * x[q, 2]
     distance = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     if not (distance < rest and distance > 0.0):
         return False

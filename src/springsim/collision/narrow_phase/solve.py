@@ -14,7 +14,8 @@ import math
 
 from ..._jit import inline_kernel, kernel
 from ..contact_sets import BALL_POINT, BALL_TRIANGLE, EDGE_EDGE, POINT_TRIANGLE
-from ..distance.closest_points import closest_on_segments, closest_on_triangle, triangle_normal
+from ..distance.closest_points import triangle_normal
+from .stencils import edge_edge_stencil, point_triangle_stencil
 
 
 @kernel
@@ -31,12 +32,12 @@ def stencil(shape, estimate, start, c, n):
     if shape == BALL_POINT:
         c[0], c[1], c[2], c[3] = 1.0, -1.0, 0.0, 0.0
     elif shape == EDGE_EDGE:
-        s, t = closest_on_segments(estimate[0], estimate[1], estimate[2], estimate[3])
+        s, t, _, _, _ = edge_edge_stencil(estimate[0], estimate[1], estimate[2], estimate[3])
         if not (0.0 < s < 1.0 and 0.0 < t < 1.0):
             return False   # the point-triangle contacts of the faces beside it decide
         c[0], c[1], c[2], c[3] = 1.0 - s, s, -(1.0 - t), -t
     else:
-        w0, w1, w2 = closest_on_triangle(estimate[0], estimate[1:])
+        w0, w1, w2, _, _, _ = point_triangle_stencil(estimate[0], estimate[1:])
         c[0], c[1], c[2], c[3] = 1.0, -w0, -w1, -w2
         if shape == POINT_TRIANGLE and w0 > 0.0 and w1 > 0.0 and w2 > 0.0:
             return face_normal(estimate, start, c, n)
@@ -54,18 +55,15 @@ def stencil(shape, estimate, start, c, n):
 
 @inline_kernel
 def face_normal(estimate, start, c, n):
-    """n = the triangle's normal at the estimate, on the side the point was at the start
-    (collision/pipeline.py's rule) if it went through the face: the point where its path
-    relative to the triangle crosses the plane (both moving straight) lies inside the
-    triangle; else on the side it is now. Why: a cloth pulled into a cone by a fast ball
-    carries points past far triangles of its own; taking the start's side for them made gaps of
-    -1 m and threw the ball 13 m up. False for a degenerate triangle."""
+    """n = the triangle's normal at the estimate, on the side the point was on at the start of
+    the step (the post-step pass's rule, narrow_phase/after_step.py), so that a point the step
+    carried through the face is pushed back, not on through. The solve takes a body's own pairs
+    only where they touch (pair_lists/own_pairs.py), so a fold's points passing far triangles
+    of their own are no contacts here. False for a degenerate triangle."""
     n0, n1, n2 = triangle_normal(estimate, 1, 2, 3)
     m0, m1, m2 = triangle_normal(start, 1, 2, 3)
     s0, s1, s2 = weighted_sum(c, start)
-    d0, d1, d2 = weighted_sum(c, estimate)
-    before, after = m0 * s0 + m1 * s1 + m2 * s2, n0 * d0 + n1 * d1 + n2 * d2
-    if before < 0.0:
+    if m0 * s0 + m1 * s1 + m2 * s2 < 0.0:
         n0, n1, n2 = -n0, -n1, -n2
     n[0], n[1], n[2] = n0, n1, n2
     return n0 != 0.0 or n1 != 0.0 or n2 != 0.0

@@ -143,7 +143,8 @@ def searched_surface_pairs(model, x, skin):
 @kernel
 def sheet_lies_unfolded(model, x, skin):
     """Whether one self-colliding sheet is the only surface and has no pair within its
-    thickness plus ``skin`` at x (collision/pair_lists/unfolded_sheet.py; False without such a sheet)."""
+    thickness plus ``skin`` at x (collision/pair_lists/unfolded_sheet.py; False without such a
+    sheet)."""
     return lies_unfolded(model.surface_triangles, model.sheet_ring_start, model.sheet_ring_edges,
                          model.sheet_boundary, model.sheet_near_boundary, model.neighbour_start,
                          model.neighbours, x, model.body_thickness.max() + skin)

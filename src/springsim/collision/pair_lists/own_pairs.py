@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._jit import kernel
-from ..distance.closest_points import edge_distance, point_triangle_distance
+from ..narrow_phase.stencils import edge_distance, point_triangle_distance
 from .keeping import pairs_at
 
 

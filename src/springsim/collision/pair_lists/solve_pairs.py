@@ -7,10 +7,10 @@ surface contacts stiff one-sided penalty springs of its solve, like the ball con
 (penalty.py: the contact set, linearization and active set shared by both). What it needs
 first is the pairs a step can bring into contact, found here.
 
-A step moves two particles i and j apart or together by at most h |v_i - v_j| <= 2 h max_k
-|v_k - u| for any velocity u (the triangle inequality); u = the centre of the surface points'
-velocity box makes the bound small for bodies moving together (a falling cloth) and 2 h V for
-two bodies approaching at V each. Pairs are searched (broad_phase/surfaces.surface_pairs) on the predicted
+A step moves two particles i and j apart or together by at most h |v_i - v_j| <= 2 h max_k |v_k -
+u| for any velocity u (the triangle inequality); u = the centre of the surface points' velocity box
+makes the bound small for bodies moving together (a falling cloth) and 2 h V for two bodies
+approaching at V each. Pairs are searched (broad_phase/surfaces.surface_pairs) on the predicted
 positions x + h v with reach = each pair's rest distance + that bound + SURFACE_REACH_SLACK of the
 largest thickness, for what the solve's velocity change adds. A model without surface contact
 returns at once.
@@ -19,14 +19,14 @@ A body's own pairs (a cloth's folds) are not searched here, but taken from the p
 list, those in contact at the step's start and at the end of each solve: own_pairs.py says
 why.
 
-The search (collision/broad_phase/surfaces.py, several times the cost of a step where
-nothing touches) is not run every step: it reaches SKIN thicknesses farther, and its list is
-kept (in the state: State.solve_pairs) while it still holds every pair a step needs. Two points' distance changes by at most 2 max_k |d_k - c| for displacements d since the
-search and any c (c = the middle of their box), so the list holds every pair within the reach
-now as long as reach + 2 max_k |d_k - c| <= the reach it was found with. A kept list has more
-candidates than a fresh one, in the same order; the extra ones are farther than the reach, which
-the solve does not close, so they stay inactive and the results are the same (unless a solve
-moves a pair past its slack).
+The search (collision/broad_phase/surfaces.py, several times the cost of a step where nothing
+touches) is not run every step: it reaches SKIN thicknesses farther, and its list is kept (in the
+state: State.solve_pairs) while it still holds every pair a step needs. Two points' distance
+changes by at most 2 max_k |d_k - c| for displacements d since the search and any c (c = the middle
+of their box), so the list holds every pair within the reach now as long as reach + 2 max_k |d_k -
+c| <= the reach it was found with. A kept list has more candidates than a fresh one, in the same
+order; the extra ones are farther than the reach, which the solve does not close, so they stay
+inactive and the results are the same (unless a solve moves a pair past its slack).
 """
 import math
 

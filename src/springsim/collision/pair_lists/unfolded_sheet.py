@@ -7,16 +7,16 @@ orientation there and the boundary stays a simple curve, the projection is one t
 mapped by positive triangles onto a region whose boundary curve winds once covers that region
 once (the degree argument).
 
-The pair search (collision/broad_phase/surfaces.py) takes a point p and a triangle of one body only if no corner is p
-or a neighbour of p, and two edges only if no end of one is an end of the other or its neighbour.
-In a one-to-one projection, such a point lies outside the triangle and such edges do not cross,
-so each pair's distance there is the distance from some particle p to an edge (r, s) with neither
-r nor s in N[p] (p and its neighbours). The projection shortens every distance, so the pair is at
-least that far apart in space too. Let U(p) be the triangles with a corner in N[p]: a
-neighbourhood of p. The straight way from p to such an edge leaves U(p) through one of its
-edges with no end in N[p] (``ring_edges``, listed for p when the model is built), or leaves the
-sheet through a boundary edge of U(p) and comes back in through a boundary edge with no end in
-N[p]. So no pair of the sheet is closer than ``reach`` if
+The pair search (collision/broad_phase/surfaces.py) takes a point p and a triangle of one body only
+if no corner is p or a neighbour of p, and two edges only if no end of one is an end of the other
+or its neighbour. In a one-to-one projection, such a point lies outside the triangle and such edges
+do not cross, so each pair's distance there is the distance from some particle p to an edge (r, s)
+with neither r nor s in N[p] (p and its neighbours). The projection shortens every distance, so the
+pair is at least that far apart in space too. Let U(p) be the triangles with a corner in N[p]: a
+neighbourhood of p. The straight way from p to such an edge leaves U(p) through one of its edges
+with no end in N[p] (``ring_edges``, listed for p when the model is built), or leaves the sheet
+through a boundary edge of U(p) and comes back in through a boundary edge with no end in N[p]. So
+no pair of the sheet is closer than ``reach`` if
 
 - every triangle faces the mean normal and the boundary does not cross itself,
 - every particle is at least ``reach`` from its ring edges in the projection,

@@ -1,4 +1,5 @@
-"""The velocity response after the step, in Jacobi passes (the post-step pass: collision/pipeline.py).
+"""The velocity response after the step, in Jacobi passes (the post-step pass:
+collision/pipeline.py).
 
 Every contact's impulse is computed from the same velocities, then all are applied. With
 W = sum_i c_i^2 n_i / m_i, a contact approaching at v_N = n . sum_i c_i v_i < 0 gets the normal

@@ -140,7 +140,7 @@ def update_active_contacts(contacts, h, ddv, rhs):
 def add_contact_product(contacts, u, out):
     """out += A_c u: each active contact adds c_i h^2 k n n^T sum_j c_j u_j to node i."""
     nodes, weights, normal = contacts.nodes, contacts.weights, contacts.normal
-    gap, coefficient, active = contacts.gap, contacts.coefficient, contacts.active
+    coefficient, active = contacts.coefficient, contacts.active
     for p in range(nodes.shape[0]):
         if not active[p]:
             continue
@@ -154,7 +154,7 @@ def add_contact_product(contacts, u, out):
 def add_contact_blocks(contacts, diagonal):
     """diagonal[i] += the diagonal blocks of A_c: c_i^2 h^2 k n n^T on each node."""
     nodes, weights, normal = contacts.nodes, contacts.weights, contacts.normal
-    gap, coefficient, active = contacts.gap, contacts.coefficient, contacts.active
+    coefficient, active = contacts.coefficient, contacts.active
     for p in range(nodes.shape[0]):
         if not active[p]:
             continue
@@ -166,7 +166,8 @@ def add_contact_blocks(contacts, diagonal):
 
 
 # How many linearized solves a step takes per radius a ball moves against a point it may touch:
-# the fewest that hold a fast ball on the cloth at 1/30 and 1/20 s (tests/test_balls_on_cloth_surface.py)
+# the fewest that hold a fast ball on the cloth at 1/30 and 1/20 s
+# (tests/test_balls_on_cloth_surface.py)
 SOLVES_PER_RADIUS = 4.0
 SLOW_CONTACT = 0.5   # below half a radius per step one solve holds the ball (tests up to 1/60 s)
 
