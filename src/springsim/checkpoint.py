@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import SceneError, require
 from .scene import Scene
-from .collision.pair_lists import PairList
+from .collision.pair_lists import EDGES, POINTS, PairList
 from .state import ContactMemory, State, solve_pair_list
 
 STATE_FORMAT = "springsim-state"
@@ -44,7 +44,8 @@ def state_arrays(state: State, prefix: str = "") -> dict:
     arrays.update({f"pairs.{name}": array for name, array in zip(PairList._fields, state.pairs)})
     if state.solve_pairs is not None:
         kept = state.solve_pairs
-        arrays.update({"solve_pairs.points": kept.pairs[0], "solve_pairs.edges": kept.pairs[1],
+        arrays.update({"solve_pairs.points": kept.pairs[POINTS],
+                       "solve_pairs.edges": kept.pairs[EDGES],
                        "solve_pairs.found_at": kept.found_at, "solve_pairs.reach": kept.reach})
     return {prefix + name: np.asarray(value) for name, value in arrays.items()}
 

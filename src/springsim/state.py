@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .collision.pair_lists import PairList, SolvePairList, no_pair_list
+from .collision.pair_lists import EDGES, POINTS, PairList, SolvePairList, no_pair_list
 from .errors import SceneError
 
 
@@ -130,7 +130,7 @@ def copy_pair_list(pairs: PairList) -> PairList:
 def copy_solve_pairs(kept: SolvePairList | None) -> SolvePairList | None:
     if kept is None:
         return None
-    return solve_pair_list(kept.pairs[0], kept.pairs[1], kept.found_at, kept.reach)
+    return solve_pair_list(kept.pairs[POINTS], kept.pairs[EDGES], kept.found_at, kept.reach)
 
 
 def solve_pair_list(points, edges, found_at, reach) -> SolvePairList:

@@ -38,7 +38,7 @@ import numpy as np
 from .._jit import kernel
 from ..collision.response.penalty import add_contact_blocks, add_contact_product
 from ..collision.contact_sets.solve import no_contacts
-from .constraints import filter_constrained, filtered
+from .constraints import FREE, filter_constrained, filtered
 from .jacobian import block_multiply
 from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
                            no_spring_terms, spring_terms_trace)
@@ -267,7 +267,7 @@ def conserve_momentum(pattern, blocks, terms, contacts, b, kind, u, q):
     """If no particle is constrained, shift u by the uniform velocity change that leaves the
     residual b - A u summing to zero in each direction (module doc); q is a work array."""
     for i in range(kind.shape[0]):
-        if kind[i] != 0:   # constraints.FREE
+        if kind[i] != FREE:
             return
     system_multiply(pattern, blocks, terms, contacts, u, q)
     for c in range(3):

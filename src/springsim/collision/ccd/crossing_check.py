@@ -39,6 +39,7 @@ import numpy as np
 
 from ..._jit import kernel
 from ..narrow_phase.stencils import edge_distance, point_triangle_distance
+from ..pair_lists import EDGES, POINTS
 from ..pair_lists.keeping import pairs_at
 from ..pair_lists.own_pairs import any_self_collision
 
@@ -66,8 +67,8 @@ def carried_through(model, start, x, pairs, kept):
     (solve_pairs.kept_surface_pairs) or, for a self-colliding body, of the post-step list
     ``pairs`` where it holds at x, else of one renewed there (only for the check: the step
     hands on its own list, so the post-step pass keeps or renews it as before)."""
-    if any_passed(model, start, x, kept.pairs[0], True) \
-            or any_passed(model, start, x, kept.pairs[1], False):
+    if any_passed(model, start, x, kept.pairs[POINTS], True) \
+            or any_passed(model, start, x, kept.pairs[EDGES], False):
         return True
     if not any_self_collision(model):
         return False

@@ -18,10 +18,13 @@ class PairList(NamedTuple):
     age: np.ndarray        # (1,) int64: the steps it has been kept since
 
 
+POINTS, EDGES = 0, 1   # the lists in SolvePairList.pairs: point-triangle, edge-edge
+
+
 class SolvePairList(NamedTuple):
     """The implicit solve's surface pairs of two bodies (solve_pairs.py), changed in place."""
 
-    pairs: List            # [point-triangle pairs (K, 2), edge-edge pairs (L, 2)]
+    pairs: List            # [POINTS]: point-triangle pairs (K, 2), [EDGES]: edge-edge (L, 2)
     found_at: np.ndarray   # (P, 3) m: the predicted positions they were found at
     reach: np.ndarray      # (1,) m: the reach they were found with; negative: none yet
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..._jit import kernel
 from ..broad_phase.surfaces import surface_pairs
-from . import SolvePairList
+from . import EDGES, POINTS, SolvePairList
 from .keeping import SKIN, spread_since
 
 
@@ -69,11 +69,11 @@ def find_surface_pairs(model, x, v, h, kept):
         for c in range(3):
             predicted[i, c] = x[i, c] + h * v[i, c]
     if reach + 2.0 * spread_since(model.surface_points, predicted, kept.found_at) <= kept.reach[0]:
-        return kept.pairs[0], kept.pairs[1]
+        return kept.pairs[POINTS], kept.pairs[EDGES]
     kept.reach[0] = reach + SKIN * thickest
     # a body's own folds are left to the post-step pass (module doc): no pair of one body
     points, edges = surface_pairs(model, predicted, kept.reach[0], NO_SELF_CONTACT)
-    kept.pairs[0], kept.pairs[1] = points, edges
+    kept.pairs[POINTS], kept.pairs[EDGES] = points, edges
     kept.found_at[:] = predicted
     return points, edges
 
