@@ -26,7 +26,9 @@ GENERATED = {
     "guide/scene-reference.md": lambda: scene_reference_markdown(),
     "guide/cli-reference.md": lambda: cli_reference_markdown(),
     "gallery.md": lambda: gallery_markdown(),
-    "changelog.md": lambda: (ROOT / "CHANGELOG.md").read_text(encoding="utf-8"),
+    # its links point into docs/ from the repository root; the page sits at the site's root
+    "changelog.md": lambda: (ROOT / "CHANGELOG.md").read_text(encoding="utf-8").replace(
+        "](docs/", "]("),
 }
 
 
