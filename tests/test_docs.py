@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from docs_examples import ROOT, environment
+from test_docs_examples import ROOT, environment
 
 from springsim.errors import SceneError
 from springsim.presets import PRESETS

@@ -211,14 +211,15 @@ def allowed_messages(scene_key) -> list[str]:
     from springsim.scenefile import set_path
 
     group, kind, _ = group_type_key(scene_key)
-    if scene_key.path.endswith(".type"):
-        return []
     scene = base_scene(group, kind)
     concrete = scene_key.path.replace(".N.", ".0.")
+    parts, values = concrete.split("."), probes(scene_key)
+    if scene_key.path.endswith(".type"):   # a type is said by a whole new table
+        parts, values = parts[:-1], [{"type": "no-such-type"}]
     messages = []
-    for value in probes(scene_key):
+    for value in values:
         try:
-            candidate = set_path(copy.deepcopy(scene), concrete.split("."), value, "", concrete)
+            candidate = set_path(copy.deepcopy(scene), parts, value, "", concrete)
             candidate.validate()
         except SceneError as error:
             if error.key == concrete or error.key.startswith(concrete + "."):
