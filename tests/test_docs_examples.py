@@ -8,6 +8,8 @@ Conventions (the README and every page of docs/ follow them):
   top to bottom, in one empty folder per page; ``text`` is output shown, not run; ``toml`` is a
   scene file, parsed (and written to a file when ``<!-- file: NAME -->`` stands just before it,
   for the blocks after it to use);
+- a ``text`` block whose first line is ``$ COMMAND`` is a transcript: the command runs and must
+  print the rest of the block (line breaks aside, so a long line may be wrapped);
 - ``<!-- no-run: REASON -->`` just before a block leaves it out (long-running or interactive
   commands), visibly, with the reason.
 """
@@ -109,7 +111,17 @@ def run_page(path: Path, folder: Path, timeout: float = 600) -> list[Block]:
             if block.file:
                 (folder / block.file).write_text(block.code, encoding="utf-8")
             continue
-        if block.no_run is not None or block.language not in RUNNABLE:
+        transcript = block.language == "text" and block.code.startswith("$ ")
+        if block.no_run is not None or not (block.language in RUNNABLE or transcript):
+            continue
+        if transcript:
+            command_line, expected = block.code.split("\n", 1)
+            done = subprocess.run(["bash", "-c", command_line[2:]], cwd=folder, env=env,
+                                  capture_output=True, text=True, timeout=timeout)
+            printed = " ".join((done.stdout + done.stderr).split())
+            assert printed == " ".join(expected.split()), (
+                f"{block.label()}: the command now prints\n{done.stdout}{done.stderr}")
+            ran.append(block)
             continue
         if block.language == "bash":
             command = ["bash", "-euo", "pipefail", "-c", block.code]
@@ -126,7 +138,7 @@ def run_page(path: Path, folder: Path, timeout: float = 600) -> list[Block]:
     return ran
 
 
-PAGES = ["README.md", "docs/getting-started.md",
+PAGES = ["README.md", "docs/getting-started.md", "docs/guide/command-line.md",
          *sorted(str(path.relative_to(ROOT)) for path in (ROOT / "docs" / "tutorials").glob("*.md"))]
 
 
