@@ -139,7 +139,8 @@ def run_page(path: Path, folder: Path, timeout: float = 600) -> list[Block]:
 
 
 PAGES = ["README.md", "docs/getting-started.md", "docs/guide/command-line.md",
-         *sorted(str(path.relative_to(ROOT)) for path in (ROOT / "docs" / "tutorials").glob("*.md"))]
+         *sorted(str(path.relative_to(ROOT))
+                 for path in (ROOT / "docs" / "tutorials").glob("*.md"))]
 
 
 @pytest.mark.parametrize("page", PAGES)

@@ -7,7 +7,7 @@ import urllib.request
 
 import pytest
 
-from test_docs_examples import ROOT, environment
+from test_docs_examples import environment
 
 
 def test_docs_serves_the_built_site(tmp_path):

@@ -196,10 +196,10 @@ def probes(scene_key):
         return ["text"]
     if kind == "string":
         return [1, "no-such-value"]
-    if kind.startswith("array of") and kind.endswith("numbers") and kind != "array of whole numbers":
-        return [["text"], [0.0] * len(default)]
     if kind == "array of whole numbers":
         return [["text"], [-1]]
+    if kind.startswith("array of") and kind.endswith("numbers"):
+        return [["text"], [0.0] * len(default)]
     if kind == "string or array":
         return [1.5, "no-such-value", [-1]]
     return []
