@@ -6,6 +6,8 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
+from importlib.metadata import PackageNotFoundError, version as _version
+
 from .errors import SceneError, SimulationDiverged
 from .integrators import integrator_names
 from .presets import preset_names
@@ -14,5 +16,10 @@ from .scenefile import load_scene
 from .simulation import Simulation
 from .sweeps import sweep
 
-__all__ = ["Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
+try:
+    __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
+except PackageNotFoundError:              # a source tree on sys.path with no install
+    __version__ = "0+unknown"
+
+__all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
            "integrator_names", "preset_names", "sweep"]

@@ -9,7 +9,7 @@ import pkgutil
 import signal
 import sys
 
-from . import commands
+from . import __version__, commands
 from .errors import OutputFailed, SceneError, SimulationDiverged
 
 # Exit codes (README, "The command line").
@@ -34,6 +34,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="springsim",
         description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
                     "of integrators. `springsim COMMAND --help` tells more.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}",
+                        help="print the version of springsim and exit")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in command_modules():
         sub = subparsers.add_parser(module.NAME, help=module.HELP, description=module.HELP)

@@ -37,6 +37,8 @@ import numbers
 import os
 import stat
 import tomllib
+import types
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -44,8 +46,9 @@ import numpy as np
 from .errors import SceneError, require
 from .presets import PRESETS, preset
 from .scene import Scene
-from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like, describe,  # noqa: F401
-                           init_fields, merge_table, typed_item, _is_table_list, _join)
+from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
+                           describe, init_fields, merge_table, typed_item, _is_integer,
+                           _is_table_list, _join, _strip_optional)
 from .terrains import TERRAIN_TYPES  # noqa: F401  (the registries, as the readers name them)
 
 
@@ -300,3 +303,67 @@ def type_name(item, registry: dict) -> str:
 # --- small helpers ------------------------------------------------------------------------------
 
 
+# --- what a scene file accepts, for the documentation ---------------------------------------------
+
+@dataclasses.dataclass(frozen=True)
+class SceneKey:
+    """One key a scene file accepts. ``path`` is the key as ``--set`` takes it, with ``N`` where
+    a list index goes (``bodies.N.structural.ks``); ``owner`` is the body or terrain type it
+    belongs to (``"scene"`` for the top level); ``kind`` says what value it holds."""
+
+    owner: str
+    path: str
+    kind: str
+    default: object
+
+
+def scene_keys() -> list[SceneKey]:
+    """Every key the readers above accept, found the way they find them (a table's keys are its
+    dataclass's fields, ``TYPED_LISTS`` says which types a list holds), so that the generated
+    scene-file reference lists exactly what a scene file may say."""
+    keys = _table_keys(Scene(), "", "scene")
+    for list_name, (_, registry) in TYPED_LISTS.items():
+        for kind, factory in registry.items():
+            keys.append(SceneKey(kind, f"{list_name}.N.type", "string", kind))
+            keys += _table_keys(factory(), f"{list_name}.N", kind)
+    return keys
+
+
+def _table_keys(node, prefix: str, owner: str) -> list[SceneKey]:
+    hints = typing.get_type_hints(type(node))
+    keys = []
+    for name in init_fields(type(node)):
+        value, path = getattr(node, name), _join(prefix, name)
+        if type(node) is Scene and name in TYPED_LISTS:
+            keys.append(SceneKey(owner, path, "array of tables, each with a type", []))
+            continue
+        keys.append(SceneKey(owner, path, _kind_text(hints.get(name, typing.Any), value), value))
+        if dataclasses.is_dataclass(value):
+            keys += _table_keys(value, path, owner)
+        elif _is_table_list(value):
+            keys += _table_keys(value[0], f"{path}.N", owner)
+    return keys
+
+
+def _kind_text(annotation, default) -> str:
+    """What ``convert`` takes for a field of this annotation and default, in words."""
+    annotation = _strip_optional(annotation)
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        return " or ".join(_kind_text(kind, default) for kind in typing.get_args(annotation))
+    if dataclasses.is_dataclass(default) or dataclasses.is_dataclass(annotation):
+        return "table"
+    names = {bool: "boolean", int: "whole number", float: "number", str: "string"}
+    if annotation in names:
+        return names[annotation]
+    if annotation is np.ndarray:
+        return "array"
+    if annotation in (tuple, list) or typing.get_origin(annotation) in (tuple, list):
+        if _is_table_list(default):
+            return "array of tables"
+        if isinstance(default, (tuple, list)) and default and all(
+                isinstance(item, float) for item in default):
+            return f"array of {len(default)} numbers"
+        if isinstance(default, (tuple, list)) and all(_is_integer(item) for item in default):
+            return "array of whole numbers"
+        return "array"
+    return "value"
