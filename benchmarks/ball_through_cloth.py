@@ -18,7 +18,7 @@ the normal at the free-flight prediction x + h v, which already has the centre a
 level, so the normals are horizontal from the first contact step; taking them at the start of
 the step instead still let 63 of 81 through.) The fix: the solve's contacts touch the cloth's
 triangles (the closest point on the triangle, its barycentric weights sharing the reaction;
-implicit/ball_contact.py), whose normals hold the ball up wherever it lands.
+collision/response/penalty.py), whose normals hold the ball up wherever it lands.
 """
 import itertools
 import sys

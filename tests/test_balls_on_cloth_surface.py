@@ -6,7 +6,7 @@ edge and at the centre of a cell. Oracle (geometric): the cloth is a surface, so
 stays above it: above the surface's height at the centre's (x, z) (the surface triangle under
 it) and above the lowest cloth particle within a radius plus a spacing of it, at the end of every
 step; and the ball did land (the cloth slowed it). Before the solve touched the cloth's triangles
-(implicit/ball_contact.py) 68 of these 81 went through: between four particles the point
+(collision/response/penalty.py) 68 of these 81 went through: between four particles the point
 contacts' normals turn sideways and push the particles apart (benchmarks/ball_through_cloth.py).
 """
 import itertools

@@ -43,7 +43,7 @@ def test_only_kernel_sources_name_the_cache(tmp_path):
         assert _edited(package, relative) == original, relative
     # a kernel's own file, a file whose kernels another file calls (forces.py: every
     # integrator), and a module whose constants kernels compile in (terrains.PLANE, via
-    # contact.py): each gives a fresh cache
+    # collision/response/terrain.py): each gives a fresh cache
     terrains = "terrains.py" if (package / "terrains.py").is_file() else "terrains/__init__.py"
     for relative in ("integrators/rk4.py", "forces.py", terrains):
         changed = _edited(package, relative)
@@ -56,7 +56,7 @@ def test_only_kernel_sources_name_the_cache(tmp_path):
 
 def test_kernel_sources_are_the_kernel_modules_and_their_imports():
     names = {path.relative_to(PACKAGE).as_posix() for path in kernel_sources()}
-    assert {"_jit.py", "forces.py", "contact.py", "integrators/rk4.py",
+    assert {"_jit.py", "forces.py", "collision/response/terrain.py", "integrators/rk4.py",
             "integrators/implicit_euler.py", "implicit/constraints.py"} <= names
     assert not names & {"cli.py", "simulation.py", "recording.py", "commands/run.py"}
 

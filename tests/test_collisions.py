@@ -187,7 +187,7 @@ def test_the_four_balls_land_on_the_cloth_and_stay_on_it_for_3_s(integrator):
 STABLE_DT = {"explicit_euler": 2e-4, "symplectic_euler": 2e-4, "midpoint": 2e-4, "rk4": 3e-4,
              "predict_reevaluate": 1e-4}
 # Backward Euler is stable far beyond them: ball-particle contacts are part of its solve
-# (implicit/ball_contact.py), so large steps must not let the ball through either.
+# (collision/response/penalty.py), so large steps must not let the ball through either.
 IMPLICIT_DT = {"implicit_euler": (5e-3, 1e-2, 1.0 / 60.0)}
 STEPS = ([(name, dt) for name, dt in STABLE_DT.items()]
          + [(name, dt) for name, steps in IMPLICIT_DT.items() for dt in steps])

@@ -1,7 +1,7 @@
 """The check that sends a backward Euler step back to be taken in halves
-(implicit/halving.py): did a point pass through a triangle, or an edge past an edge, during
-the step? Oracles: straight-line motions whose answer is plain geometry (a point driven through
-a triangle's middle passes it; the same motion beside the triangle, short of it, or an edge
+(collision/ccd/crossing_check.py): did a point pass through a triangle, or an edge past an edge,
+during the step? Oracles: straight-line motions whose answer is plain geometry (a point driven
+through a triangle's middle passes it; the same motion beside the triangle, short of it, or an edge
 turning past a parallel one at a distance does not)."""
 import numpy as np
 import pytest

@@ -1,4 +1,5 @@
-"""Surface contact inside backward Euler's solve (implicit/ball_contact.py, implicit/surface_contact.py).
+"""Surface contact inside backward Euler's solve (collision/response/penalty.py,
+collision/pair_lists/solve_pairs.py).
 
 Oracles: a cube resting on another stays on top of it, its surface never more than a thickness
 into the other's, at frame-sized steps; a cube thrown at 10 to 20 m/s onto a cube or a cloth does
@@ -164,10 +165,10 @@ def test_a_cube_pressing_a_folded_cloth_never_pushes_one_layer_through_the_other
 @pytest.mark.parametrize("shift", [0.0, 0.007])
 def test_a_cube_dropped_fast_onto_a_folded_cloth_never_pushes_one_layer_through_the_other(shift):
     """A 32 kg cube at 5 m/s, 1/60 s (8 cm a step against layers 2.5 cm apart), the layers
-    aligned or nearly: the step closes the fold, so the cloth's own pairs in contact at the
-    step's start are not enough; those in contact at the end of a solve join the contact set
-    and the solve is done again (implicit/own_contact.py). With the start's pairs alone the
-    cloth crossed itself (20 and 17 crossings)."""
+    aligned or nearly: the step closes the fold, so the cloth's own pairs in contact at the step's
+    start are not enough; those in contact at the end of a solve join the contact set and the solve
+    is done again (collision/pair_lists/own_pairs.py). With the start's pairs alone the cloth
+    crossed itself (20 and 17 crossings)."""
     dt = 1.0 / 60.0
     simulation = cube_onto_folded_cloth(dt, 5.0, shift=shift, particle_mass=0.5)
     assert_the_cloth_never_crosses_itself(simulation, dt)
@@ -178,9 +179,9 @@ def test_a_cube_dropped_fast_onto_a_folded_cloth_never_pushes_one_layer_through_
 def test_a_heavy_cube_dropped_fast_onto_a_folded_cloth_never_pushes_it_through_itself(dt, shift):
     """A 128 kg cube at 5 m/s presses harder than the solve's penalty contacts hold within one
     step: with them alone the cloth crossed itself in each of these runs (1246, 1479, 3 and 807
-    crossings). A step that carries a point through a triangle or an edge past an edge is
-    taken again in halves (integrators/implicit_euler.implicit_euler_step): no edge of the cloth ever crosses one of its
-    triangles or one of the cube's, and some steps were halved."""
+    crossings). A step that carries a point through a triangle or an edge past an edge is taken
+    again in halves (integrators/implicit_euler.implicit_euler_step): no edge of the cloth ever
+    crosses one of its triangles or one of the cube's, and some steps were halved."""
     simulation = cube_onto_folded_cloth(dt, 5.0, shift=shift)
     triangles = simulation.model.arrays.surface_triangles
     of_cloth = simulation.model.arrays.particle_body[triangles[:, 0]] == 0

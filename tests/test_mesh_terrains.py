@@ -139,7 +139,7 @@ def test_a_jelly_torus_comes_to_rest_on_a_mesh_floor(folder):
 CACHED_CALL = """
 import numpy as np
 import springsim
-from springsim.contact import apply_contact_forces
+from springsim.collision.response.terrain import apply_contact_forces
 model = springsim.Simulation(springsim.load_scene("jelly-plane")).model
 x = model.initial_positions.copy()
 a = np.zeros_like(x)

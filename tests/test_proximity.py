@@ -1,4 +1,5 @@
-"""The surface pair search (proximity.surface_pairs) against a brute force over every pair.
+"""The surface pair search (collision/broad_phase/surfaces.surface_pairs) against a brute force
+over every pair.
 
 Oracle: plain-Python closest-point distances (Ericson, Real-Time Collision Detection, 5.1.5 and
 5.1.9) over every (point, triangle) and (edge, edge) pair of scenes of overlapping, crumpled

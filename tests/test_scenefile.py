@@ -21,6 +21,7 @@ from springsim.scenefile import BODY_TYPES, scene_to_toml, toml_value
 from springsim.terrains import TERRAIN_TYPES
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "scene-files.md"
+README = Path(__file__).resolve().parents[1] / "README.md"
 
 # The jelly-plane preset, every key written out, in the different ways TOML allows.
 JELLY_PLANE_TOML = """
@@ -116,7 +117,7 @@ def test_the_documented_examples_build_their_presets(tmp_path):
     assert examples, "docs/scene-files.md shows no preset example"
     for name, text in examples.items():
         assert_same_model(load_scene(write(tmp_path, text, f"{name}.toml")), preset(name))
-    text = DOC.read_text()
+    text = DOC.read_text() + README.read_text()
     assert all(f"`{name}`" in text or name in examples for name in PRESETS)
 
 
@@ -137,10 +138,15 @@ def all_tables():
 
 
 def test_the_documentation_names_every_key_a_file_can_say():
-    text = DOC.read_text()
+    """Every field of every table a scene file can describe is a key of the site's scene-file
+    reference, which the documentation's hook generates (docs/hooks/reference.py)."""
+    from test_docs import hook
+
+    text = hook.scene_reference_markdown()
     missing = [f"{cls.__name__}.{field.name}" for cls in all_tables()
-               for field in dataclasses.fields(cls) if f"`{field.name}`" not in text]
-    assert not missing, "docs/scene-files.md does not describe " + ", ".join(missing)
+               for field in dataclasses.fields(cls) if f".{field.name}`" not in text
+               and f"`{field.name}`" not in text]
+    assert not missing, "the scene-file reference does not describe " + ", ".join(missing)
 
 
 OVERRIDES = {"bodies.0.particles_per_edge": 7, "bodies.0.structural.ks": 1234.0,

@@ -171,7 +171,7 @@ def test_a_cube_slides_down_a_tilted_cube_at_g_sin_minus_mu_cos(integrator, mu):
     for mu = 0 (no friction: the contact only holds the cube up), 0.3 and 0.5. The soft
     cube sways on its sliding bottom layer, which moves its centre of mass a little against
     the layer (0.1% measured for mu = 0.3). Under implicit_euler the friction is that of the
-    solve's penalty contacts (implicit/contact_friction.py), at the same dt."""
+    solve's penalty contacts (collision/response/solve_friction.py), at the same dt."""
     theta, dt = np.radians(30.0), 1e-3
     simulation = tilted_stack(integrator, dt, theta, mu)
     small = body_slice(simulation, 1)

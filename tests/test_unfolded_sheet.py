@@ -1,8 +1,8 @@
 """Oracles of unfolded_sheet.lies_unfolded: where it says a self-colliding sheet has no pair of its
-own within reach, the pair search itself (proximity.surface_pairs) finds none; a flat or gently
-rippled cloth passes (a grid cloth's ring edges are sqrt(2) spacings away against a reach of
-at most 0.75); only a surface that is one oriented disk gets the arrays; and a run that uses
-it steps bit for bit as one that searches.
+own within reach, the pair search itself (collision/broad_phase/surfaces.surface_pairs) finds none;
+a flat or gently rippled cloth passes (a grid cloth's ring edges are sqrt(2) spacings away against
+a reach of at most 0.75); only a surface that is one oriented disk gets the arrays; and a run that
+uses it steps bit for bit as one that searches.
 """
 import dataclasses
 

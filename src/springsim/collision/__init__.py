@@ -4,9 +4,10 @@
                    triangles and edges, gathered once when the model is built; terrains are
                    their own package (springsim.terrains), reached through response/terrain.py
         |
-    broad_phase/   candidates without testing every pair: grid.py, the uniform grid and its
-                   cell arithmetic; balls.py, (ball, particle) pairs; surfaces.py, (point,
-                   triangle) and (edge, edge) pairs within a reach
+    broad_phase/   candidates without testing every pair: grid.py, the uniform grid (its cell
+                   arithmetic and counting sort; particles as points or shapes as boxes);
+                   balls.py, (ball, particle) pairs; surfaces.py, (point, triangle) and
+                   (edge, edge) pairs within a reach
         |
     pair_lists/    surface pairs kept between steps (a Verlet list: keeping.py) and the proofs
                    that let a list be kept or skip a search (rigid_pieces.py, unfolded_sheet.py);
@@ -14,8 +15,9 @@
                    step's reach; own_pairs.py: a self-colliding body's pairs in contact)
         |
     narrow_phase/  one stencil per touching pair: four particles, signed weights c summing to
-                   zero and a normal. after_step.py, at the end of a step (impulse contacts);
-                   solve.py, at a Newton estimate (penalty contacts of the solve)
+                   zero and a normal, from the one builder of stencils.py. after_step.py, at the
+                   end of a step (impulse contacts); solve.py, at a Newton estimate (penalty
+                   contacts of the solve)
         |
     contact_sets/  the stencils gathered into one named set: ImpulseContacts (after the step),
                    SolveContacts (inside backward Euler's solve)
@@ -30,7 +32,7 @@
     distance/      closest points and distances between a point, a triangle and segments,
                    used by every stage above
 
-pipeline.py runs the stages after every integrator's update (``collide_after_step``):
+pipeline.py runs the stages after every integrator's update (``resolve_contacts``):
 keep or renew the pair list, find the touching stencils, respond. Backward Euler also calls the
 stages inside its solve (integrators/implicit_euler.py).
 

@@ -11,7 +11,7 @@ from ._steps import add_scaled, Motion, drive, two_stage_scratch
 
 @inline_kernel
 def midpoint_step(model, state, scratch, h, pairs):
-    x, v = state
+    x, v = state.x, state.v
     a, x_mid, v_mid, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_mid, x, h / 2, v)

@@ -24,7 +24,7 @@ from ._steps import add_scaled, Motion, drive, two_stage_scratch
 
 @inline_kernel
 def predict_reevaluate_step(model, state, scratch, h, pairs):
-    x, v = state
+    x, v = state.x, state.v
     a, x_p, v_p, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_p, x, h, v)

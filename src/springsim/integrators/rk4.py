@@ -17,7 +17,7 @@ from ._steps import Motion, drive
 
 @inline_kernel
 def rk4_step(model, state, scratch, h, pairs):
-    x, v = state
+    x, v = state.x, state.v
     x_k, v_k, a, dx, dv, columns = scratch
     accelerations(model, x, v, h, a, columns)      # k1 = (v, a)
     first_stage(x, v, a, x_k, v_k, dx, dv, h / 2)

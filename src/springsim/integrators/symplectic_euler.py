@@ -7,7 +7,7 @@ from ._steps import add_scaled, Motion, drive, one_stage_scratch
 
 @inline_kernel
 def symplectic_euler_step(model, state, scratch, h, pairs):
-    x, v = state
+    x, v = state.x, state.v
     a, columns = scratch
     accelerations(model, x, v, h, a, columns)
     add_scaled(v, v, h, a)

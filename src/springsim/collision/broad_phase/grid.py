@@ -122,25 +122,33 @@ def box_grid(boxes, least_cells):
     for c in range(3):
         dims[c] = int(extent[c] / cell) + 1
     home = np.empty(count, np.int64)
-    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
     for b in range(count):
-        home[b] = ((cell_coordinate(boxes[b, 0], origin[0], cell, dims[0]) * dims[1]
-                    + cell_coordinate(boxes[b, 1], origin[1], cell, dims[1])) * dims[2]
-                   + cell_coordinate(boxes[b, 2], origin[2], cell, dims[2]))
-        cell_start[home[b] + 1] += 1
-    for number in range(1, cell_start.shape[0]):
-        cell_start[number] += cell_start[number - 1]
-    cursor = cell_start[:-1].copy()
-    members = np.empty(count, np.int64)
-    for b in range(count):   # in box order: each cell's members ascend
-        members[cursor[home[b]]] = b
-        cursor[home[b]] += 1
+        home[b] = cell_number(boxes[b, 0], boxes[b, 1], boxes[b, 2], origin, cell, dims)
+    cell_start, members = sorted_by_cell(home, dims[0] * dims[1] * dims[2])
     # the members' boxes in the same order: a query then reads them from contiguous memory
     member_boxes = np.empty((count, 6))
     for k in range(count):
         for c in range(6):
             member_boxes[k, c] = boxes[members[k], c]
     return BoxGrid(origin, cell, dims, cell_start, members, member_boxes, largest)
+
+
+@kernel
+def sorted_by_cell(cell_of, cell_count):
+    """(cell_start, order): a counting sort of items by their cell ``cell_of``; cell c holds
+    the items order[cell_start[c]:cell_start[c + 1]], in their own order (stable), so that each
+    cell's members ascend. Linear in the items and cells: the grids are rebuilt every call."""
+    cell_start = np.zeros(cell_count + 1, np.int64)
+    for k in range(cell_of.shape[0]):
+        cell_start[cell_of[k] + 1] += 1
+    for cell in range(1, cell_start.shape[0]):
+        cell_start[cell] += cell_start[cell - 1]
+    cursor = cell_start[:-1].copy()
+    order = np.empty(cell_of.shape[0], np.int64)
+    for k in range(cell_of.shape[0]):
+        order[cursor[cell_of[k]]] = k
+        cursor[cell_of[k]] += 1
+    return cell_start, order
 
 
 @kernel
@@ -171,20 +179,14 @@ def build_grid(x, members, cell_size):
     for c in range(3):
         dims[c] = int(extent[c] / cell_size) + 1
     cell_of = np.empty(count, np.int64)
-    cell_start = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int64)
     for k in range(count):
         i = members[k]
         cell_of[k] = cell_number(x[i, 0], x[i, 1], x[i, 2], origin, cell_size, dims)
-        cell_start[cell_of[k] + 1] += 1
-    for cell in range(1, cell_start.shape[0]):
-        cell_start[cell] += cell_start[cell - 1]
-    cursor = cell_start[:-1].copy()
+    cell_start, order = sorted_by_cell(cell_of, dims[0] * dims[1] * dims[2])
     sorted_members = np.empty(count, np.int64)
     sorted_x = np.empty((count, 3))
-    for k in range(count):  # in members' order, which keeps each cell's particles ascending
-        slot = cursor[cell_of[k]]
-        cursor[cell_of[k]] += 1
-        i = members[k]
+    for slot in range(count):
+        i = members[order[slot]]
         sorted_members[slot] = i
         sorted_x[slot, 0], sorted_x[slot, 1], sorted_x[slot, 2] = x[i, 0], x[i, 1], x[i, 2]
     return PointGrid(origin, cell_size, dims, cell_start, sorted_members, sorted_x)

@@ -15,7 +15,6 @@ from . import CORRECTION, PARAMS, PASSES, ImpulseContacts
 from ..narrow_phase.after_step import ball_contact, point_triangle_contact, edge_edge_contact
 
 
-
 @inline_kernel
 def touching_contacts(model, x, start, point_pairs, edge_pairs, balls):
     """The touching pairs as stencils (ImpulseContacts): surfaces first (point-triangle,

@@ -29,7 +29,6 @@ from . import BALL_POINT, BALL_TRIANGLE, EDGE_EDGE, POINT_TRIANGLE, SolveContact
 BALL_REACH_SLACK = 0.1    # share of the ball's radius added to the candidates' search reach
 
 
-
 @kernel
 def empty_contacts(count):
     """A SolveContacts of ``count`` contacts, all inactive."""
