@@ -53,7 +53,7 @@ def main():
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
     assemble_diagonal_and_terms(simulation.model.arrays, layout.diagonal, x, 1.0, 1 / 60,
                                 1 / 3600, blocks, terms)
-    kind, normal = simulation.state.contacts[0], np.zeros_like(x)
+    kind, normal = simulation.state.contacts.kind, np.zeros_like(x)
     rng = np.random.default_rng(1)
     s, c, q = rng.standard_normal(x.shape), rng.standard_normal(x.shape), np.empty_like(x)
     arguments = (layout.diagonal, blocks, terms, no_contacts(), kind, normal, s)

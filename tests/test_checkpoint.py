@@ -18,7 +18,7 @@ import springsim
 from springsim import checkpoint
 from springsim.cli import main
 from springsim.errors import SceneError
-from springsim.collision.pair_lists import PairList
+from springsim.collision.pair_lists import POINTS, PairList
 from springsim.state import ContactMemory
 
 # The jelly cube thrown sideways onto the plane: it lands, bounces and slides against friction.
@@ -84,7 +84,7 @@ def test_the_pair_lists_travel_with_the_state_and_a_resumed_run_keeps_them(tmp_p
     first = pile()
     first.advance(1.2)   # the cubes have landed on each other: pairs in reach
     assert len(first.state.pairs.points) > 0 and first.state.solve_pairs is not None
-    assert len(first.state.solve_pairs.pairs[0]) > 0
+    assert len(first.state.solve_pairs.pairs[POINTS]) > 0
     copied = first.state.copy()
     assert copied.pairs.points is not first.state.pairs.points
     assert copied.solve_pairs.found_at is not first.state.solve_pairs.found_at

@@ -165,9 +165,9 @@ def test_kernels_calling_the_generated_dispatcher_load_from_the_cache():
 
 def test_contact_looked_up_a_block_ahead_is_the_planes(folder):
     """A mesh terrain's distances are looked up a block of particles ahead of their contact
-    (contact.py): on a flat mesh floor every particle, in every block (1000 particles: the last
-    block partial), gets the plane's reaction and friction to round-off, pinned ones none, with a
-    second terrain after it in the list."""
+    (collision/response/terrain.py): on a flat mesh floor every particle, in every block (1000
+    particles: the last block partial), gets the plane's reaction and friction to round-off, pinned
+    ones none, with a second terrain after it in the list."""
     from springsim.collision.response.terrain import apply_contact_forces
     from springsim.model import build_model
     from springsim.terrains import Plane

@@ -173,7 +173,8 @@ def test_a_particle_rebounds_with_the_terrain_restitution(cube_simulation, resti
 def test_an_approach_too_slow_to_rebound_out_of_the_band_is_resting_contact(cube_simulation,
                                                                             height, bounces):
     """Landing slower than sqrt(2 g epsilon) = 0.44 m/s, a rebound would stay inside the 1 cm
-    band: the particle stops instead (contact.py). From 5 cm it lands at 0.9 m/s and bounces."""
+    band: the particle stops instead (collision/response/terrain.py). From 5 cm it lands at 0.9 m/s
+    and bounces."""
     plane = Plane(point=(0.0, 0.0, 0.0), restitution=0.8)
     simulation = free_particles(cube_simulation, plane)
     lowest = simulation.positions[:, 1] == simulation.positions[:, 1].min()

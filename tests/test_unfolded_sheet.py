@@ -159,11 +159,12 @@ def test_a_list_proven_within_the_thickness_alone_serves_its_step_and_is_never_k
     assert list_holds(arrays.surface_points, arrays.body_thickness, now, before)
     old = start_surface_pairs(arrays, flat)
     listed = renewed_surface_pairs(arrays, before, old)
-    assert len(listed[0]) == 0 and len(listed[1]) == 0
-    assert not list_holds(arrays.surface_points, arrays.body_thickness, now, listed[2])
+    assert len(listed.points) == 0 and len(listed.edges) == 0
+    assert not list_holds(arrays.surface_points, arrays.body_thickness, now, listed.found_at)
     renewed = renewed_surface_pairs(arrays, now, listed)
     skin = surface_skin(arrays)
-    for got, searched in zip(renewed[:2], surface_pairs(arrays, now, skin, skin)):
+    searched_pairs = surface_pairs(arrays, now, skin, skin)
+    for got, searched in zip((renewed.points, renewed.edges), searched_pairs):
         assert np.array_equal(got, searched)
 
 

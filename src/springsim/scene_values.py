@@ -36,10 +36,10 @@ def merge_table(base, table, prefix: str):
     require(isinstance(table, dict), prefix or "scene", table,
             "must be a table with the keys " + ", ".join(fields))
     for name in table:
-        require(name in fields, _join(prefix, name), table[name],
+        require(name in fields, join_key(prefix, name), table[name],
                 f"unknown key; {describe(base, prefix)} takes " + ", ".join(fields))
     changes = {name: convert_field(type(base), fields[name], value, getattr(base, name),
-                                   _join(prefix, name))
+                                   join_key(prefix, name))
                for name, value in table.items()}
     return dataclasses.replace(base, **changes)
 
@@ -50,12 +50,12 @@ def new_dataclass(cls, table, key: str):
     require(isinstance(table, dict), key, table, "must be a table with the keys "
             + ", ".join(fields))
     for name in table:
-        require(name in fields, _join(key, name), table[name],
+        require(name in fields, join_key(key, name), table[name],
                 f"unknown key; {key} takes " + ", ".join(fields))
     missing = [name for name, field in fields.items()
                if name not in table and _default_of(field) is MISSING]
     require(not missing, key, table, "needs the keys " + ", ".join(missing))
-    return cls(**{name: convert_field(cls, fields[name], value, MISSING, _join(key, name))
+    return cls(**{name: convert_field(cls, fields[name], value, MISSING, join_key(key, name))
                   for name, value in table.items()})
 
 
@@ -88,7 +88,7 @@ def convert(value, annotation, current, default, key: str):
     ``current`` is the field's present value (a dataclass there is edited, not replaced) and
     ``default`` its default (which says what a bare ``tuple`` holds); either may be MISSING.
     """
-    annotation = _strip_optional(annotation)
+    annotation = strip_optional(annotation)
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         return _convert_union(value, typing.get_args(annotation), current, default, key)
     if dataclasses.is_dataclass(current):
@@ -122,7 +122,7 @@ def _scalar(value, kind: type, key: str):
     if kind is bool:
         require(isinstance(value, bool), key, value, "must be true or false")
     elif kind is int:
-        require(_is_integer(value), key, value, "must be a whole number (no decimal point)")
+        require(is_integer(value), key, value, "must be a whole number (no decimal point)")
     elif kind is float:
         require(_is_finite_number(value), key, value, "must be a finite number")
     else:
@@ -189,8 +189,8 @@ def _like_default(value, default, container, key: str):
         require(len(value) == len(default) and all(map(_is_finite_number, value)), key, value,
                 f"must be an array of {len(default)} finite numbers")
         return container(float(item) for item in value)
-    if all(_is_integer(item) for item in default):
-        require(all(map(_is_integer, value)), key, value, "must be an array of whole numbers")
+    if all(is_integer(item) for item in default):
+        require(all(map(is_integer, value)), key, value, "must be an array of whole numbers")
         return container(value)
     return container(_plain_list(value, key))
 
@@ -206,10 +206,10 @@ def check_values(node, prefix: str = "") -> None:
     file's value is checked (its kind; a float finite), so that the Python API refuses what a
     scene file refuses, with the same one-line SceneError."""
     for name, field in init_fields(type(node)).items():
-        value, key = getattr(node, name), _join(prefix, name)
+        value, key = getattr(node, name), join_key(prefix, name)
         if dataclasses.is_dataclass(value):
             check_values(value, key)
-        elif _is_table_list(value):
+        elif is_table_list(value):
             for i, item in enumerate(value):
                 check_values(item, f"{key}.{i}")
         elif value is not None or not _may_be_unset(type(node), field):
@@ -256,7 +256,7 @@ def _may_be_unset(owner: type, field: dataclasses.Field) -> bool:
             and type(None) in typing.get_args(annotation))
 
 
-def _strip_optional(annotation):
+def strip_optional(annotation):
     """``X | None`` is ``X`` here: TOML has no null."""
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         arguments = [a for a in typing.get_args(annotation) if a is not type(None)]
@@ -265,7 +265,7 @@ def _strip_optional(annotation):
     return annotation
 
 
-def _is_table_list(value) -> bool:
+def is_table_list(value) -> bool:
     return (isinstance(value, (tuple, list)) and len(value) > 0
             and all(dataclasses.is_dataclass(item) for item in value))
 
@@ -281,7 +281,7 @@ def _is_finite_number(value) -> bool:
         return False
 
 
-def _is_integer(value) -> bool:
+def is_integer(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
@@ -289,5 +289,5 @@ def _is_plain(value) -> bool:
     return isinstance(value, (int, float, str, bool))
 
 
-def _join(prefix: str, name: str) -> str:
+def join_key(prefix: str, name: str) -> str:
     return f"{prefix}.{name}" if prefix else name

@@ -47,8 +47,8 @@ from .errors import SceneError, require
 from .presets import PRESETS, preset
 from .scene import Scene
 from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
-                           describe, init_fields, merge_table, typed_item, _is_integer,
-                           _is_table_list, _join, _strip_optional)
+                           describe, init_fields, merge_table, typed_item, is_integer,
+                           is_table_list, join_key, strip_optional)
 from .terrains import TERRAIN_TYPES  # noqa: F401  (the registries, as the readers name them)
 
 
@@ -164,7 +164,7 @@ def set_path(node, parts: list[str], value, prefix: str, full_key: str):
     ``prefix`` is the key of ``node``; errors about the path name the whole ``full_key``.
     """
     head, rest = parts[0], parts[1:]
-    key = _join(prefix, head)
+    key = join_key(prefix, head)
     if isinstance(node, (list, tuple)):
         index = _list_index(node, head, prefix, full_key, value)
         items = list(node)
@@ -244,7 +244,7 @@ def _table_lines(node, prefix: str, defaults=None) -> list[str]:
         if dataclasses.is_dataclass(value):
             inner = _table_lines(value, key, getattr(defaults, name, None))
             tables += [f"[{key}]"] + inner
-        elif _is_table_list(value):
+        elif is_table_list(value):
             for item in value:
                 item_defaults = _default_instance(type(item)) if defaults is not None else None
                 tables += [f"[[{key}]]"] + _table_lines(item, key, item_defaults)
@@ -333,21 +333,21 @@ def _table_keys(node, prefix: str, owner: str) -> list[SceneKey]:
     hints = typing.get_type_hints(type(node))
     keys = []
     for name in init_fields(type(node)):
-        value, path = getattr(node, name), _join(prefix, name)
+        value, path = getattr(node, name), join_key(prefix, name)
         if type(node) is Scene and name in TYPED_LISTS:
             keys.append(SceneKey(owner, path, "array of tables, each with a type", []))
             continue
         keys.append(SceneKey(owner, path, _kind_text(hints.get(name, typing.Any), value), value))
         if dataclasses.is_dataclass(value):
             keys += _table_keys(value, path, owner)
-        elif _is_table_list(value):
+        elif is_table_list(value):
             keys += _table_keys(value[0], f"{path}.N", owner)
     return keys
 
 
 def _kind_text(annotation, default) -> str:
     """What ``convert`` takes for a field of this annotation and default, in words."""
-    annotation = _strip_optional(annotation)
+    annotation = strip_optional(annotation)
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         return " or ".join(_kind_text(kind, default) for kind in typing.get_args(annotation))
     if dataclasses.is_dataclass(default) or dataclasses.is_dataclass(annotation):
@@ -358,12 +358,12 @@ def _kind_text(annotation, default) -> str:
     if annotation is np.ndarray:
         return "array"
     if annotation in (tuple, list) or typing.get_origin(annotation) in (tuple, list):
-        if _is_table_list(default):
+        if is_table_list(default):
             return "array of tables"
         if isinstance(default, (tuple, list)) and default and all(
                 isinstance(item, float) for item in default):
             return f"array of {len(default)} numbers"
-        if isinstance(default, (tuple, list)) and all(_is_integer(item) for item in default):
+        if isinstance(default, (tuple, list)) and all(is_integer(item) for item in default):
             return "array of whole numbers"
         return "array"
     return "value"

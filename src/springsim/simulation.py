@@ -105,7 +105,7 @@ class Simulation:
                 f"must be a whole number of steps from 0 to 2^53 = {MAX_STEPS}")
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
-        self.state.check(self.model.particle_count, self.surface_shapes())
+        self.state.check(self.model.particle_count, self._surface_shapes())
         done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
                                                  self.threads)
         self.state.time += done * self.dt
@@ -119,7 +119,7 @@ class Simulation:
                 dt=self.dt, particle=particle, position=self.state.positions[particle],
                 speed_squared=speed_squared)
 
-    def surface_shapes(self) -> tuple[int, int]:
+    def _surface_shapes(self) -> tuple[int, int]:
         """How many surface triangles and edges the model has (the pair lists number them)."""
         arrays = self.model.arrays
         return len(arrays.surface_triangles), len(arrays.surface_edges)

@@ -106,21 +106,46 @@ class State:
                 ("edges", pairs.edges, (2,), np.int64, (edges, edges)),
                 ("found_at", pairs.found_at, (3,), np.float64, None),
                 ("age", pairs.age, (), np.int64, None)]
-        for name, array, columns, dtype, limits in rows:
-            if not (isinstance(array, np.ndarray) and array.shape[1:] == columns
-                    and array.dtype == dtype and array.flags.c_contiguous
-                    and array.flags.writeable):
-                raise SceneError(f"state.pairs.{name}", _Summary(array),
-                                 f"must be a writeable C-contiguous {np.dtype(dtype)} array of "
-                                 f"shape (N,) + {columns}")
-            if shapes is not None and limits is not None and array.size and not (
-                    array.min() >= 0 and array[:, 0].max() < limits[0]
-                    and array[:, 1].max() < limits[1]):
-                raise SceneError(f"state.pairs.{name}", _Summary(array),
-                                 "must number particles, triangles and edges of this model")
+        check_rows("state.pairs", rows, shapes is not None)
         if pairs.age.shape != (1,) or pairs.found_at.shape[0] not in (0, particle_count):
             raise SceneError("state.pairs", "a list of another model",
                              f"must be found for this model's {particle_count} particles")
+        self.check_solve_pairs(particle_count, triangles, edges)
+
+    def check_solve_pairs(self, particle_count: int, triangles, edges) -> None:
+        """The solve's kept list, as its kernels read it (None: none yet)."""
+        kept = self.solve_pairs
+        if kept is None:
+            return
+        if not isinstance(kept, SolvePairList) or len(kept.pairs) != 2:
+            raise SceneError("state.solve_pairs", type(kept).__name__,
+                             "must be a collision.pair_lists.SolvePairList or None")
+        rows = [("points", kept.pairs[POINTS], (2,), np.int64, (particle_count, triangles)),
+                ("edges", kept.pairs[EDGES], (2,), np.int64, (edges, edges)),
+                ("found_at", kept.found_at, (3,), np.float64, None),
+                ("reach", kept.reach, (), np.float64, None)]
+        check_rows("state.solve_pairs", rows, triangles is not None)
+        if kept.found_at.shape[0] != particle_count or kept.reach.shape != (1,):
+            raise SceneError("state.solve_pairs", "a list of another model",
+                             f"must be found for this model's {particle_count} particles")
+
+
+def check_rows(key: str, rows: list, numbered: bool) -> None:
+    """Each (name, array, columns, dtype, limits) as the kernels read it: a writeable
+    C-contiguous array of that dtype and shape (N,) + columns, and, where ``numbered`` and
+    ``limits`` say, its two columns below those limits."""
+    for name, array, columns, dtype, limits in rows:
+        if not (isinstance(array, np.ndarray) and array.shape[1:] == columns
+                and array.dtype == dtype and array.flags.c_contiguous
+                and array.flags.writeable):
+            raise SceneError(f"{key}.{name}", _Summary(array),
+                             f"must be a writeable C-contiguous {np.dtype(dtype)} array of "
+                             f"shape (N,) + {columns}")
+        if numbered and limits is not None and array.size and not (
+                array.min() >= 0 and array[:, 0].max() < limits[0]
+                and array[:, 1].max() < limits[1]):
+            raise SceneError(f"{key}.{name}", _Summary(array),
+                             "must number particles, triangles and edges of this model")
 
 
 def copy_pair_list(pairs: PairList) -> PairList:

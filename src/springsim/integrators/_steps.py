@@ -28,10 +28,11 @@ import numpy as np
 from numba import prange
 
 from .._jit import inline_kernel, kernel
-from ..collision.response.terrain import resolve_terrain_impacts
-from ..forces import force_columns
 from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
+from ..collision.response.terrain import resolve_terrain_impacts
+from ..forces import force_columns
+
 
 class Motion(NamedTuple):
     """The state an explicit method advances."""
@@ -97,6 +98,9 @@ def copy_positions(out, x):
         for c in range(3):
             out[i, c] = x[i, c]
 
+
+# An explicit method's scratch is a plain tuple, made and taken apart in its own file: Numba's
+# parallel array analysis cannot unpack a NamedTuple in the threaded kernels (parallel_advance).
 
 @kernel
 def one_stage_scratch(x):

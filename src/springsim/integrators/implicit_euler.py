@@ -420,6 +420,7 @@ class ImplicitEuler(Integrator):
             self.statistics, float(dt), int(steps), state.pairs)
         return int(done), int(particle)
 
+
 def _is_whole(value) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
 

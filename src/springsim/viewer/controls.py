@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 from ..bodies.cube import Cube
+from ..collision.pair_lists import no_pair_list
 from ..collision.shapes.settings import SurfaceContact
 from ..errors import SceneError, SimulationDiverged
 from ..render.drawing import DrawOptions
@@ -206,7 +207,9 @@ class Controls:
     def _replace(self, sim: Simulation, keep_state: bool) -> None:
         old = getattr(self, "sim", None)
         if keep_state and old is not None and old.model.particle_count == sim.model.particle_count:
-            sim.state = old.state
+            # the motion goes on; the pair lists were found for the old model (its surfaces and
+            # thicknesses), so the new one finds its own
+            sim.state = dataclasses.replace(old.state, pairs=no_pair_list(), solve_pairs=None)
             sim.steps_taken = old.steps_taken
         else:
             self.reframe = True

@@ -6,6 +6,10 @@ grid of points (broad_phase/balls.py), with cells as wide as the largest ball, a
 where each grown box of a surface shape lies in the cell of its low corner (surfaces.py,
 collision/pair_lists/unfolded_sheet.py). Both cap their cells per member (MAX_CELLS_PER_PARTICLE):
 a particle far away would otherwise make the grid, and its memory, huge.
+
+Why two layouts of one grid rather than every shape as a box: the balls' search runs every step
+over every particle (a cloth's thousands of points) and reads their positions alone; stored as
+boxes, each point would be six numbers written and read every step instead of three.
 """
 from typing import NamedTuple
 
@@ -114,8 +118,8 @@ def box_grid(boxes, least_cells):
             origin[c], extent[c] = low, high - low
         if not largest[c] < np.inf:
             largest[c] = 1.0
-    # at least GRID_CELLS: a small mesh (cloth-balls's 1,800 edges) had its cells doubled
-    # by the per-box cap once it draped in 3D, and searched 7% slower
+    # at least ``least_cells``: the per-box cap alone doubles a small mesh's cells once it drapes
+    # in 3D, and its search slows down
     cell = grid_cell_size(extent, largest.max() / CELLS_PER_BOX,
                           max(MAX_CELLS_PER_PARTICLE * count, least_cells))
     dims = np.empty(3, np.int64)

@@ -1,17 +1,17 @@
 """A backward Euler step that carries a surface through another is taken again in halves.
 
 The solve's contacts are penalty springs (pair_lists/solve_pairs.py, pair_lists/own_pairs.py):
-stiff, but not hard. A heavy load met within one large step can press them past what they hold: a
-128 kg cube dropped at 5 m/s onto a cloth folded in half pushed the top layer through the bottom
-one at its corners in 8 of 12 runs at 1/60 and 1/30 s, while at 1/120 and 1/240 s none crossed
-(benchmarks/folded_cloth_press.py). So each step is checked for what the post-step pass cannot
-undo, a surface carried through another (``carried_through``), and where it finds one, the step is
-taken again from its start as two steps of half the size, each checked the same way (after a half
-that passes, the steps grow back), down to 1 / 2^MOST_HALVINGS of the step. Where even that crosses
-(a cloth already tangled, passing out as well as in, or a load the contacts cannot hold at any
-step), halving does not help, and the step is taken whole from its start, as it would be without
-the check: a 128 kg cube at 10 m/s, carried on from a crossed 1/16 part, threw itself 10 m up,
-where taken whole it stays down, crossed as it was without the check. So a step never loops, and
+stiff, but not hard. A heavy load met within one large step can press them past what they hold:
+a heavy cube dropped fast onto a cloth folded in half pushes the top layer through the bottom one
+at its corners at frame-sized steps, and not at steps a few times shorter
+(benchmarks/folded_cloth_press.py prints how often). So each step is checked for what the post-step
+pass cannot undo, a surface carried through another (``carried_through``), and where it finds one,
+the step is taken again from its start as two steps of half the size, each checked the same way
+(after a half that passes, the steps grow back), down to 1 / 2^MOST_HALVINGS of the step. Where
+even that crosses (a cloth already tangled, passing out as well as in, or a load the contacts
+cannot hold at any step), halving does not help, and the step is taken whole from its start, as it
+would be without the check (a heavy cube carried on from a crossed part instead threw itself up,
+where taken whole it stays down, crossed as it was without the check). So a step never loops, and
 one that halving cannot help ends as without it (but for the solve's own pair list,
 pair_lists/solve_pairs.py, which a rejected part may have renewed and which is not put back: a list
 kept longer only holds more candidates, farther than the solve's reach), at the cost of the parts
@@ -31,9 +31,8 @@ that passes back out does, so a tangled cloth pays for halvings that cannot help
 pass through and back within one step (the volume's sign is the same at both ends), a pair whose
 volume changes sign more than once (the bisection finds one of the moments), a pair carried out
 of the lists' reach by the end of the step (beyond its rest distance plus the skin,
-collision/pipeline.py), and neighbours along a surface edge, which self-contact leaves out (a
-cloth folded sharply along a line can still cross itself there: a 32 kg cube at 10 m/s did, in 2
-of 6 runs at 1/60 s).
+pair_lists/keeping.py), and neighbours along a surface edge, which self-contact leaves out (a
+cloth folded sharply along a line can still cross itself there under a fast, heavy load).
 """
 import numpy as np
 
@@ -45,18 +44,10 @@ from ..pair_lists.own_pairs import any_self_collision
 
 
 MOST_HALVINGS = 6   # a step is cut into parts down to 1 / 2^MOST_HALVINGS of it
-
-
 PASS_TOLERANCE = 0.25   # of the rest distance: how near, where coplanar, counts as through
-
-
 BISECTIONS = 30   # halvings of the step that find where four points are coplanar
-
-
-# the four points where they are coplanar, as closest_points.py reads them
+# the four points where they are coplanar, as narrow_phase/stencils.py's distances read them
 ONE_TRIANGLE = np.array([[0, 1, 2]])   # a triangle (rows 0, 1, 2) and a point (row 3)
-
-
 TWO_EDGES = np.array([[0, 1], [2, 3]])
 
 

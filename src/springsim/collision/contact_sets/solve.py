@@ -4,7 +4,7 @@ bring into contact, all inactive until the solve linearizes them (response/penal
 Ball pairs: every (ball a, point b) pair that the step could bring into contact is a candidate:
 the broad phase (broad_phase/balls.find_contacts) run on the predicted positions x + h (v + dv),
 with each ball's radius grown by the distance the step can close, h (|v_a| + the fastest point's
-speed), plus BALL_BALL_REACH_SLACK of its radius. Ball-ball pairs are left to the post-step pass
+speed), plus BALL_REACH_SLACK of its radius. Ball-ball pairs are left to the post-step pass
 (they bounce).
 
 A particle of a sheet (a cloth: model.sheet_triangles) is touched through its triangles, not as

@@ -24,11 +24,11 @@ def stencil(shape, estimate, start, c, n):
     positions at the estimate and at the start of the step (module doc); False if it cannot
     touch (two edges closest at an end, a surface point on its triangle's edge).
 
-    A surface point beside its triangle (closest to an edge or a corner) keeps the direction of
-    d, as collision/pipeline.py does: going around an edge is no passing through (the faces and
-    edges beside it catch that), and taking the start's direction there held a cloth's points
-    apart where the cloth folded around a fast ball (its fall was stopped at a third of its
-    depth)."""
+    A surface point beside its triangle (closest to an edge or a corner) keeps the direction of d,
+    as narrow_phase/after_step.point_triangle_contact does: going around an edge is no passing
+    through (the faces and edges beside it catch that), and taking the start's direction there held
+    a cloth's points apart where the cloth folded around a fast ball (its fall was stopped at a
+    third of its depth)."""
     if shape == BALL_POINT:
         c[0], c[1], c[2], c[3] = 1.0, -1.0, 0.0, 0.0
     elif shape == EDGE_EDGE:

@@ -29,7 +29,7 @@ class SolvePairList(NamedTuple):
     reach: np.ndarray      # (1,) m: the reach they were found with; negative: none yet
 
 
-def no_pair_list(particle_count: int = 0) -> PairList:
+def no_pair_list() -> PairList:
     """No list yet: the first step searches (or proves there is nothing to find)."""
     return PairList(np.empty((0, 2), np.int64), np.empty((0, 2), np.int64),
                     np.empty((0, 3)), np.zeros(1, np.int64))

@@ -49,7 +49,8 @@ def kept_surface_pairs(x):
     pairs = List()
     pairs.append(np.empty((0, 2), np.int64))
     pairs.append(np.empty((0, 2), np.int64))
-    return SolvePairList(pairs, np.empty_like(x), np.full(1, -1.0))
+    # zeros, not empty: a saved state's bytes depend on nothing but the run
+    return SolvePairList(pairs, np.zeros_like(x), np.full(1, -1.0))
 
 
 @kernel

@@ -98,7 +98,7 @@ def boundary_edges(triangles, particle_count):
 
 
 def sorted_holds(sorted_keys, keys):
-    """Which of ``keys`` are in ``sorted_keys`` (np.isin hashes, ten times slower here)."""
+    """Which of ``keys`` are in ``sorted_keys`` (np.isin hashes, which costs more here)."""
     at = np.minimum(np.searchsorted(sorted_keys, keys), len(sorted_keys) - 1)
     return sorted_keys[at] == keys
 

@@ -66,7 +66,8 @@ def impulse_passes(inv_mass, v, contacts, mobility, pushed, push):
     """Jacobi passes, as many as the contact that takes most (params[:, 5]): friction against
     the accumulated normal impulse ``pushed``, plus, if ``push``, the normal impulses that stop
     each approach (adding to ``pushed``)."""
-    nodes, weights, normal, depth, params = contacts
+    nodes, weights = contacts.nodes, contacts.weights
+    normal, params = contacts.normal, contacts.params
     count = nodes.shape[0]
     stuck = np.zeros(count, np.bool_)
     impulse = np.zeros((count, 3))      # this pass's, per contact

@@ -13,7 +13,8 @@ def correct_overlaps(inv_mass, x, start, contacts, stuck, mobility):
     params[k, 4] of the sliding of a stuck one during the step (all for surfaces, none for
     balls), shared like the impulses (module doc). All shifts are found from the same positions
     before any is made (Jacobi, as the impulses)."""
-    nodes, weights, normal, depth, params = contacts
+    nodes, weights, normal = contacts.nodes, contacts.weights, contacts.normal
+    depth, params = contacts.depth, contacts.params
     shift = np.zeros((nodes.shape[0], 3))
     for k in range(nodes.shape[0]):
         if not mobility[k] > 0.0:

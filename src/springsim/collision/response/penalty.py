@@ -50,7 +50,9 @@ STIFFNESS = 100.0    # h^2 k / m_eff: a pair alone keeps 1/101 of its predicted 
 def linearize_contacts(model, contacts, x, v, dv, h, rhs):
     """Weights, normals, gaps and coefficients about the estimate x + h (v + dv); activate the
     contacts with g < 0 and add their right-hand side (module doc)."""
-    nodes, weights, normal, gap, coefficient, active, shape, rest = contacts
+    nodes, weights, normal, gap = contacts.nodes, contacts.weights, contacts.normal, contacts.gap
+    coefficient, active, shape, rest = (contacts.coefficient, contacts.active, contacts.shape,
+                                        contacts.rest)
     estimate, start = np.empty((4, 3)), np.empty((4, 3))
     for p in range(nodes.shape[0]):
         for i in range(4):

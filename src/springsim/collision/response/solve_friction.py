@@ -27,7 +27,9 @@ def apply_contact_friction(model, contacts, x_end, v, h):
     ``contacts`` on the end-of-step velocities v, in place, against their penalty impulses at
     the end-of-step positions ``x_end`` (module doc). Returns whether there was any (then the
     positions are to be taken from v again)."""
-    nodes, weights, normal, gap, coefficient, active, shape, rest = contacts
+    nodes, weights, normal = contacts.nodes, contacts.weights, contacts.normal
+    coefficient, active, shape, rest = (contacts.coefficient, contacts.active, contacts.shape,
+                                        contacts.rest)
     rows = np.empty(nodes.shape[0], np.int64)
     count = 0
     for p in range(nodes.shape[0]):
