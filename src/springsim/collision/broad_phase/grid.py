@@ -1,4 +1,5 @@
-"""The uniform grid of the broad phase: cell arithmetic, and a grid of boxes.
+"""The uniform grid of the broad phase: its cell arithmetic, its counting sort, and its two
+layouts, particles as points (PointGrid) and shapes as boxes (BoxGrid).
 
 Two searches sort what they look up into a grid rebuilt from the positions on every call (a
 counting sort by cell, so the cost grows like the shapes' count, not their product): the balls'
