@@ -12,8 +12,10 @@ import pytest
 
 import springsim
 from springsim.bodies.cube import Cube
+from springsim.collision.pair_lists import EDGES, POINTS
 from springsim.errors import SceneError
 from springsim.scene import Scene
+from springsim.state import solve_pair_list
 from springsim.terrains import Plane
 
 INF, NAN = math.inf, math.nan
@@ -144,5 +146,25 @@ def test_a_pair_list_that_numbers_shapes_the_model_lacks_is_refused():
     simulation.state.pairs = (pairs.points, pairs.edges)
     refused(lambda: simulation.step(1), "state.pairs")
     simulation.state.pairs = pairs
+    simulation.step(1)
+    assert simulation.steps_taken == 2
+
+
+def test_a_solve_pair_list_that_numbers_shapes_the_model_lacks_is_refused():
+    """Backward Euler's kept list of pairs of two bodies is read by its kernels too: one naming
+    a triangle past the model's, or found for another number of particles, is refused."""
+    simulation = springsim.Simulation(springsim.load_scene("jelly-stack"), dt=1 / 60,
+                                      integrator="implicit_euler")
+    simulation.step(1)
+    kept = simulation.state.solve_pairs
+    triangles = len(simulation.model.arrays.surface_triangles)
+    wrong = solve_pair_list(np.array([[0, triangles]]), kept.pairs[EDGES], kept.found_at,
+                            kept.reach)
+    simulation.state.solve_pairs = wrong
+    refused(lambda: simulation.step(1), "state.solve_pairs.points")
+    simulation.state.solve_pairs = solve_pair_list(kept.pairs[POINTS], kept.pairs[EDGES],
+                                                   kept.found_at[:-1], kept.reach)
+    refused(lambda: simulation.step(1), "state.solve_pairs")
+    simulation.state.solve_pairs = kept
     simulation.step(1)
     assert simulation.steps_taken == 2

@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 from springsim.bodies.cloth import Cloth
 from springsim.bodies.cube import Cube
 from springsim.scene import Scene
+from springsim.simulation import Simulation
 from springsim.springs import SpringKind, SpringParameters
 from springsim.terrains import Bowl
 from springsim.viewer.controls import UNSTABLE_MESSAGE, Controls, real_time_steps
@@ -159,6 +160,27 @@ def test_body_contact_settings_change_the_kernel_arrays_and_keep_the_state():
     assert controls.set_self_collision(1, False) and controls.set_thickness(1, 0.5)
     assert controls.message == "" and controls.sim.model.arrays.body_thickness[1] == 0.5
     assert not controls.set_thickness(0, 1.5) and "bodies.0.thickness" in controls.message
+
+
+def test_an_edit_that_keeps_the_motion_finds_its_own_pair_lists():
+    """The state's pair lists were found for the old model: its surfaces, numbered its way,
+    and its thicknesses, which decide how far a list reaches. An edit that keeps the motion
+    (a thicker cube on the pile) keeps positions and velocities but not the lists: the new
+    model finds its own at its next step, as a fresh run does."""
+    controls = Controls("jelly-stack")
+    controls.sim.advance(1.2)   # the cubes lie on each other: pairs in the list
+    assert len(controls.sim.state.pairs.points) > 0
+    before = controls.sim.positions.copy()
+    assert controls.set_thickness(1, 0.2)
+    sim = controls.sim
+    assert np.array_equal(sim.positions, before)
+    assert len(sim.state.pairs.points) == 0 and len(sim.state.pairs.found_at) == 0
+    fresh = Simulation(sim.scene, threads=1)
+    fresh.state = sim.state.copy()
+    sim.step(1)
+    fresh.step(1)
+    assert np.array_equal(sim.positions, fresh.positions)
+    assert len(sim.state.pairs.found_at) == sim.model.particle_count
 
 
 def test_terrain_buttons_and_a_bad_setting_keep_the_old_simulation():
