@@ -77,6 +77,7 @@ class Simulation:
         self.integrator = get_integrator(scene.integrator, **self._integrator_options)
         self.dt = float(scene.dt)
         self.state = State.initial(self.model)
+        self._lists_left = (None, None)   # the pair lists the last step left (State.check)
 
     @property
     def steps_taken(self) -> int:
@@ -105,9 +106,10 @@ class Simulation:
                 f"must be a whole number of steps from 0 to 2^53 = {MAX_STEPS}")
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
-        self.state.check(self.model.particle_count, self._surface_shapes())
+        self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
         done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
                                                  self.threads)
+        self._lists_left = (self.state.pairs, self.state.solve_pairs)
         self.state.time += done * self.dt
         self.state.steps += done
         if particle >= 0:

@@ -65,12 +65,15 @@ class State:
                      self.contacts.copy(), self.steps, copy_pair_list(self.pairs),
                      copy_solve_pairs(self.solve_pairs))
 
-    def check(self, particle_count: int, shapes: tuple[int, int] | None = None) -> None:
+    def check(self, particle_count: int, shapes: tuple[int, int] | None = None,
+              trusted: tuple = (None, None)) -> None:
         """Raise a SceneError unless every array is what the compiled kernels assume: the
         model's shape and dtype, C-contiguous and writeable. A kernel trusts its arrays' sizes,
         so a replaced ``positions`` of another shape would be written past its end.
         ``shapes``: how many surface triangles and edges the model has, which the pair lists
-        number (None: their numbers are not checked).
+        number (None: their numbers are not checked); ``trusted``: the (pairs, solve_pairs) that
+        the last compiled call left in this state, whose rows are not read again (a pass over
+        them, and over a typed list from Python, every call would cost a short step's time).
         Cheap (attribute checks, and a pass over the pair lists): it runs before every compiled
         call."""
         wanted = [("positions", self.positions, (particle_count, 3), np.float64),
@@ -89,19 +92,24 @@ class State:
                 raise SceneError(f"state.{name}", _Summary(array),
                                  f"must be a writeable C-contiguous {np.dtype(dtype)} array of "
                                  f"shape {shape}: the model has {particle_count} particles")
-        self.check_pairs(particle_count, shapes)
+        self.check_pairs(particle_count, shapes, trusted)
         if not (isinstance(self.time, (int, float, np.number)) and math.isfinite(self.time)):
             raise SceneError("state.time", self.time, "must be a finite number of seconds")
         if not (isinstance(self.steps, (int, np.integer)) and self.steps >= 0):
             raise SceneError("state.steps", self.steps, "must be a whole number >= 0")
 
-    def check_pairs(self, particle_count: int, shapes: tuple[int, int] | None) -> None:
+    def check_pairs(self, particle_count: int, shapes: tuple[int, int] | None,
+                    trusted: tuple = (None, None)) -> None:
         """The pair lists' arrays as the kernels read them, their rows within the model's."""
         pairs = self.pairs
         if not isinstance(pairs, PairList):
             raise SceneError("state.pairs", type(pairs).__name__,
                              "must be a collision.pair_lists.PairList")
         triangles, edges = shapes if shapes is not None else (None, None)
+        if self.solve_pairs is not trusted[1]:
+            self.check_solve_pairs(particle_count, triangles, edges)
+        if pairs is trusted[0]:
+            return
         rows = [("points", pairs.points, (2,), np.int64, (particle_count, triangles)),
                 ("edges", pairs.edges, (2,), np.int64, (edges, edges)),
                 ("found_at", pairs.found_at, (3,), np.float64, None),
@@ -110,7 +118,6 @@ class State:
         if pairs.age.shape != (1,) or pairs.found_at.shape[0] not in (0, particle_count):
             raise SceneError("state.pairs", "a list of another model",
                              f"must be found for this model's {particle_count} particles")
-        self.check_solve_pairs(particle_count, triangles, edges)
 
     def check_solve_pairs(self, particle_count: int, triangles, edges) -> None:
         """The solve's kept list, as its kernels read it (None: none yet)."""
