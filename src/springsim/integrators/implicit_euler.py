@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import inline_kernel, kernel
+from .._jit import kernel
 from ..collision.ccd.crossing_check import MOST_HALVINGS, carried_through
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, any_self_collision, grown_own_pairs,
@@ -121,8 +121,6 @@ class Scratch(NamedTuple):
 
 
 # --- the method ---------------------------------------------------------------------------------
-# The named parts of the step are inlined into it: each takes the scratch or the work arrays,
-# dozens of arrays whose reference counts a call would take up and down.
 
 @kernel
 def backward_euler_step(model, state, scratch, h, pairs):
@@ -154,7 +152,7 @@ def backward_euler_step(model, state, scratch, h, pairs):
     return pairs
 
 
-@inline_kernel
+@kernel
 def find_step_contacts(model, state, solve_pairs, work, h, pairs):
     """The step's constraints (pins, terrain contacts: into the state's memory and
     ``work.normal``) and its contact set; returns (the contact set, a self-colliding body's own
@@ -167,7 +165,7 @@ def find_step_contacts(model, state, solve_pairs, work, h, pairs):
     return contacts, own, pairs
 
 
-@inline_kernel
+@kernel
 def start_estimate(state, work):
     """dv = 0: the first estimate is (x, v)."""
     work.dv[:] = 0.0
@@ -175,7 +173,7 @@ def start_estimate(state, work):
     work.v_k[:] = state.v
 
 
-@inline_kernel
+@kernel
 def update_estimate(state, work, ddv, h):
     """dv += ddv; v_k = v + dv, x_k = x + h v_k."""
     add_scaled(work.dv, work.dv, 1.0, ddv)
@@ -183,7 +181,7 @@ def update_estimate(state, work, ddv, h):
     add_scaled(work.x_k, state.x, h, work.v_k)
 
 
-@inline_kernel
+@kernel
 def assemble_system(model, layout, state, work, contacts, h, first):
     """A = M - h D - h^2 K at the estimate and b (``newton_rhs``), the contacts linearized into
     both, and ddv's start: the constrained components held, the friction carried from the last
@@ -221,7 +219,7 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
         add_stiffness_product(model, x, v, h * h, rhs)
 
 
-@inline_kernel
+@kernel
 def solve_with_contacts(model, scratch, state, contacts, h, first):
     """Solve A ddv = b for ``work.ddv``, updating terrain contacts and friction
     (implicit/constraints.py) and the penalty contacts' active set (collision/response/penalty.py)
@@ -263,7 +261,7 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
     statistics.linear_solves[0] += solves
 
 
-@inline_kernel
+@kernel
 def own_pairs_met(model, state, work, h, own, pairs):
     """(whether a self-colliding body's own pairs in contact grew, them (OwnPairs), the list):
     ``own`` and those that the estimate after this solve, x + h (v_k + ddv), brings into
@@ -277,7 +275,7 @@ def own_pairs_met(model, state, work, h, own, pairs):
     return grew, own, pairs
 
 
-@inline_kernel
+@kernel
 def end_step(model, state, work, contacts, h):
     """The penalty contacts' friction, then x = x_k, v = v_k; the velocity change is kept as
     the next step's guess, and impact speeds are restored for the restitution pass."""
