@@ -36,15 +36,7 @@ def read_mesh(file: str, key: str) -> TriangleMesh:
 
 @functools.lru_cache(maxsize=16)
 def _read(path: str, mtime_ns: int, size: int, key: str) -> TriangleMesh:
-    try:
-        import trimesh
-    except ImportError:   # pragma: no cover - the mesh extra is part of every set-up
-        raise SceneError(key, path, "needs trimesh: pip install 'springsim[mesh]'") from None
-    try:
-        loaded = trimesh.load(path, force="mesh", process=True)
-    except Exception as error:   # trimesh raises many kinds for a file it cannot parse
-        raise SceneError(key, path, f"is not a mesh file trimesh can read ({_first_line(error)}); "
-                                    "give an " + ", ".join(SUFFIXES) + " file") from None
+    loaded = _trimesh_load(path, key, process=True)
     faces = getattr(loaded, "faces", None)
     require(faces is not None and len(faces) > 0, key, path, "holds no triangles")
     vertices = np.asarray(loaded.vertices, float)
@@ -129,3 +121,141 @@ def check_closed(mesh: TriangleMesh, key: str, file: str) -> float:
                 "; its normals point inwards: flip them (trimesh: mesh.invert())"
                 if volume < 0 else ""))
     return volume
+
+
+# --- a mesh file as the artist has it: its own vertices in its own order, polygons, groups -------
+
+class MeshFile(NamedTuple):
+    """A mesh file as written: the file's own vertices in the file's order (seam duplicates
+    included, so that what we export applies to the same file in Blender or Houdini), its faces
+    as polygons, and its named groups."""
+
+    vertices: np.ndarray   # (V, 3) float64, m, in the file's order
+    faces: np.ndarray      # (F, K) int64 rows of vertices, padded with -1 (K: the largest face)
+    groups: dict           # name -> (n,) int64 vertices of the faces in the OBJ group or object
+
+    def triangles(self) -> np.ndarray:
+        """(T, 3) the faces split into fans from their first corner (quads into two)."""
+        return fan_triangles(self.faces)
+
+
+def read_mesh_file(file: str, key: str) -> MeshFile:
+    """The mesh in ``file`` as written (MeshFile): OBJ is read here, keeping its quads, groups
+    and vertex order (trimesh would split vertices along UV seams and triangulate); other
+    formats through trimesh without merging or reordering anything."""
+    require(isinstance(file, str) and file != "", key, file,
+            "must name a mesh file (" + ", ".join(SUFFIXES) + ")")
+    path = Path(file).expanduser()
+    require(path.is_file(), key, file, "no such file" + (
+        "" if path.is_absolute() else f" (relative to {Path.cwd()}; in a scene file a "
+        "relative path is relative to the scene file's folder)"))
+    stat = path.stat()
+    return _read_file(str(path.resolve()), stat.st_mtime_ns, stat.st_size, key)
+
+
+@functools.lru_cache(maxsize=16)
+def _read_file(path: str, mtime_ns: int, size: int, key: str) -> MeshFile:
+    if path.lower().endswith(".obj"):
+        mesh = _read_obj(path, key)
+    else:
+        loaded = _trimesh_load(path, key, process=False)
+        faces = getattr(loaded, "faces", None)
+        mesh = MeshFile(np.asarray(loaded.vertices, float),
+                        np.asarray(faces if faces is not None else np.empty((0, 3)), np.int64),
+                        {})
+    require(len(mesh.vertices) > 0, key, path, "holds no vertices")
+    bad = np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))
+    if bad.size:
+        raise SceneError(key, path, f"has {bad.size} vertices that are not finite numbers (the "
+                                    f"first is number {int(bad[0])}); fix or remove them")
+    require(len(mesh.faces) > 0, key, path, "holds no faces (triangles or polygons)")
+    return mesh
+
+
+def _read_obj(path: str, key: str) -> MeshFile:
+    """Wavefront OBJ: ``v`` lines, ``f`` lines of ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``
+    corners (negative numbers count back from the last vertex), ``g`` and ``o`` names."""
+    vertices, faces, groups, current = [], [], {}, []
+    try:
+        with open(path, encoding="utf-8", errors="replace") as file:
+            for number, line in enumerate(file, 1):
+                words = line.split()
+                if not words:
+                    continue
+                if words[0] == "v":
+                    vertices.append(words[1:4])
+                elif words[0] == "f":
+                    corners = [int(word.split("/", 1)[0]) for word in words[1:]]
+                    corners = [c - 1 if c > 0 else len(vertices) + c for c in corners]
+                    if len(corners) >= 3:
+                        faces.append(corners)
+                        for name in current:
+                            groups[name].append(corners)
+                elif words[0] in ("g", "o"):
+                    current = words[1:] or ["default"]
+                    for name in current:
+                        groups.setdefault(name, [])
+    except (ValueError, IndexError) as error:
+        raise SceneError(key, path, f"is not an OBJ file this reader understands (line "
+                                    f"{number}: {error}); give an OBJ, STL, PLY, OFF or GLB "
+                                    "file") from None
+    try:
+        vertices = np.asarray(vertices, float).reshape(-1, 3)
+    except ValueError as error:
+        raise SceneError(key, path, f"has a vertex line with fewer than three numbers "
+                                    f"({error})") from None
+    padded = _padded(faces)
+    require(padded.size == 0 or (padded.min() >= -1 and padded.max() < len(vertices)), key, path,
+            f"has a face naming a vertex it does not have (it has {len(vertices)})")
+    named = {name: np.unique(_padded(rows)[_padded(rows) >= 0]) for name, rows in groups.items()
+             if rows}
+    return MeshFile(vertices, padded, named)
+
+
+def _padded(faces: list) -> np.ndarray:
+    width = max((len(face) for face in faces), default=3)
+    padded = np.full((len(faces), width), -1, np.int64)
+    for row, face in enumerate(faces):
+        padded[row, :len(face)] = face
+    return padded
+
+
+def _trimesh_load(path: str, key: str, process: bool):
+    try:
+        import trimesh
+    except ImportError:   # pragma: no cover - the mesh extra is part of every set-up
+        raise SceneError(key, path, "needs trimesh: pip install 'springsim[mesh]'") from None
+    try:
+        return trimesh.load(path, force="mesh", process=process)
+    except Exception as error:  # noqa: BLE001  (trimesh raises many kinds for a bad file)
+        raise SceneError(key, path, f"is not a mesh file trimesh can read ({_first_line(error)}); "
+                                    "give an " + ", ".join(SUFFIXES) + " file") from None
+
+
+def fan_triangles(faces: np.ndarray) -> np.ndarray:
+    """(T, 3) int64: each polygon (a row padded with -1) as a fan from its first corner."""
+    triangles = [faces[:, [0, k, k + 1]][faces[:, k + 1] >= 0] for k in range(1, faces.shape[1] - 1)]
+    if not triangles:
+        return np.empty((0, 3), np.int64)
+    # keep each face's triangles together, in the face's order
+    face = np.concatenate([np.flatnonzero(faces[:, k + 1] >= 0) for k in range(1, faces.shape[1] - 1)])
+    order = np.argsort(face, kind="stable")
+    return np.concatenate(triangles)[order]
+
+
+class Welded(NamedTuple):
+    vertices: np.ndarray   # (W, 3) one per distinct position, in order of first appearance
+    of_file_vertex: np.ndarray   # (V,) int64: the welded vertex of each file vertex
+
+
+def weld(vertices: np.ndarray, tolerance: float = 1e-9) -> Welded:
+    """Vertices at the same position (within ``tolerance`` of the mesh's size) made one: a file
+    splits a vertex along its UV and normal seams, and a body or cloth must not split there."""
+    size = float(np.max(np.ptp(vertices, axis=0))) if len(vertices) else 0.0
+    keys = np.round(vertices / max(tolerance * size, 1e-300)).astype(np.int64) if size else \
+        np.zeros((len(vertices), 3), np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    # number the distinct positions in order of their first appearance in the file
+    rank = np.empty(len(first), np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    return Welded(vertices[np.sort(first)], rank[inverse.ravel()])
