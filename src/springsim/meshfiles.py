@@ -233,14 +233,11 @@ def _trimesh_load(path: str, key: str, process: bool):
 
 
 def fan_triangles(faces: np.ndarray) -> np.ndarray:
-    """(T, 3) int64: each polygon (a row padded with -1) as a fan from its first corner."""
-    triangles = [faces[:, [0, k, k + 1]][faces[:, k + 1] >= 0] for k in range(1, faces.shape[1] - 1)]
-    if not triangles:
-        return np.empty((0, 3), np.int64)
-    # keep each face's triangles together, in the face's order
-    face = np.concatenate([np.flatnonzero(faces[:, k + 1] >= 0) for k in range(1, faces.shape[1] - 1)])
-    order = np.argsort(face, kind="stable")
-    return np.concatenate(triangles)[order]
+    """(T, 3) int64: each polygon (a row padded with -1) as a fan from its first corner: every
+    face's first triangle in face order, then every second one (of quads and larger), and so on
+    (the order a grid's two triangles per cell come in, bodies/cube.py grid_triangles)."""
+    fans = [faces[faces[:, k + 1] >= 0][:, [0, k, k + 1]] for k in range(1, faces.shape[1] - 1)]
+    return np.concatenate(fans) if fans else np.empty((0, 3), np.int64)
 
 
 class Welded(NamedTuple):

@@ -25,7 +25,7 @@ class ModelArrays(NamedTuple):
     drag: np.ndarray             # (P,) viscous drag coefficient c (N s/m): f = -c v
     springs: np.ndarray          # (S, 2) uint32 particle numbers (unsigned: no wrap-around checks)
     rest_length: np.ndarray      # (S,) m
-    spring_group: np.ndarray     # (S,) int16, row of the group tables below (one per (ks, kd))
+    spring_group: np.ndarray     # (S,) int32, row of the group tables below (one per (ks, kd))
     group_ks: np.ndarray         # (G,) N/m
     group_kd: np.ndarray         # (G,) N s/m
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
@@ -127,14 +127,21 @@ def build_model(scene) -> Model:
             members = body.spring_kind == kind
             if not members.any():
                 continue
-            group = group_of.setdefault((params.ks, params.kd), len(group_of))
+            if body.spring_constants is None:
+                constants = np.array([[params.ks, params.kd]])
+                inverse = np.zeros(members.sum(), np.int64)
+            else:
+                constants, inverse = np.unique(body.spring_constants[members], axis=0,
+                                               return_inverse=True)
+            number = np.array([group_of.setdefault((float(ks), float(kd)), len(group_of))
+                               for ks, kd in constants], np.int32)
             springs.append(body.springs[members] + np.int32(start))
-            groups.append(np.full(members.sum(), group, np.int16))
+            groups.append(number[inverse.ravel()])
             kinds.append(body.spring_kind[members])
     group_ks = [ks for ks, kd in group_of]
     group_kd = [kd for ks, kd in group_of]
     springs = np.concatenate(springs) if springs else np.empty((0, 2), np.int32)
-    groups = np.concatenate(groups) if groups else np.empty(0, np.int16)
+    groups = np.concatenate(groups) if groups else np.empty(0, np.int32)
     kinds = np.concatenate(kinds) if kinds else np.empty(0, np.int8)
     # Sorting by the first particle makes the force loop's writes walk memory in order.
     order = np.argsort(springs[:, 0], kind="stable")
@@ -180,11 +187,9 @@ def particle_drag(scene, built) -> np.ndarray:
 
 def sheet_arrays(built, offsets) -> dict:
     """The sheets' triangles in global particle numbers, and each particle's triangles (CSR): a
-    sheet is a body whose surface is its particles themselves (no embedding) and holds every
-    one of them, as a cloth's does (a cube's interior is not on its surface)."""
-    triangles = [b.surface.astype(np.int64) + start for b, start in zip(built, offsets)
-                 if b.embedding is None and len(b.surface)
-                 and np.unique(b.surface).size == len(b.masses)]
+    sheet is a body that is all surface (BuiltBody.sheet: a cloth)."""
+    triangles = [sheet_surface(b).astype(np.int64) + start for b, start in zip(built, offsets)
+                 if b.sheet]
     triangles = np.concatenate(triangles) if triangles else np.empty((0, 3), np.int64)
     corners = triangles.ravel()
     order = np.argsort(corners, kind="stable")
@@ -192,6 +197,11 @@ def sheet_arrays(built, offsets) -> dict:
     return {"sheet_triangles": triangles,
             "triangle_start": np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
             "particle_triangles": (order // 3).astype(np.int64)}
+
+
+def sheet_surface(built) -> np.ndarray:
+    """A sheet's triangles of particles (its contact surface where its drawn one is a file's)."""
+    return built.collision_surface if built.collision_surface is not None else built.surface
 
 
 def collision_arrays(specs, built, radius) -> dict:

@@ -28,6 +28,12 @@ class BuiltBody:
     # (c, 3) triangles of particle numbers that other bodies touch (collision/shapes/surfaces.py;
     # None: the surface, when it is not embedded)
     collision_surface: np.ndarray | None = None
+    # (s, 2) each spring's (ks, kd), from a material (bodies/cloth_material.py); None: the
+    # spring_parameters of its kind
+    spring_constants: np.ndarray | None = None
+    # a sheet is all surface (a cloth): balls touch it through its triangles in implicit_euler's
+    # solve (model.sheet_arrays)
+    sheet: bool = False
 
 
 __all__ = ["BuiltBody", "SpringParameters"]

@@ -1,4 +1,5 @@
-"""Cloth: an N x N grid of particles joined by structural, shear and bend springs.
+"""Cloth: an N x N grid of particles, or any triangle or quad mesh (``file``), joined by
+structural, shear and bend springs.
 
 Defaults are the course framework's scene 2 (see the reference): 25 particles per edge, a 4 m x 4 m
 sheet flat at y = 0 (x and z in [-2, 2]), 1 kg particles, ks = 25000 N/m and kd = 750 N s/m for
@@ -9,16 +10,33 @@ Particle (i, j) is number ``i N + j``; it lies in the cloth's local x-z plane at
 by ``rotation_degrees`` about ``rotation_axis`` and moved to ``position`` (its centre). Springs, as
 in the reference: structural +1, +N; shear +N+1, +N-1; bend +2, +2N. For N = 25 that is 1200, 1152
 and 1150 springs. Cloth particles are points (contact radius 0).
+
+With ``file``, the particles and springs come from the mesh (bodies/sheet_mesh.py), scaled by
+``scale``, rotated about the file's origin and moved by ``position``; ``particles_per_edge``,
+``width`` and ``height`` are then unused. Named pinnings act in the file's frame: ``"corners"``
+pins the vertex nearest each corner of the mesh's bounding box in its x-z plane, ``"edge+z"``
+(``"edge"``) the vertices on the box's +z face, and so on. A vertex in no face holds still.
+
+``material`` (bodies/cloth_material.py) replaces ``particle_mass`` and the per-kind ``ks``/``kd``
+by a density and stiffnesses per unit strain, for grid and mesh cloth alike; ``pins``
+(bodies/pins.py) add pinned particles by number, box or mesh group to those ``pinned`` names.
 """
+import functools
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import is_finite, require, require_angle
+from ..errors import SceneError, is_finite, require, require_angle
+from ..meshfiles import fan_triangles, placed, read_mesh_file
+from ..sizes import BYTES_PER_PARTICLE, gigabytes, machine_memory
 from ..springs import SpringKind, SpringParameters, lattice_springs
+from ..surfaces import Embedding
 from . import BuiltBody
-from .cube import grid_triangles
+from .cloth_material import ClothMaterial, lumped_masses, material_constants
+from .pins import Pin, pinned_mask
+from .sheet_mesh import SheetMesh, sheet_mesh, sheet_springs
 from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((0, 1), (1, 0))
@@ -56,17 +74,16 @@ class Cloth(SurfaceContact):
     thickness: float | None = None         # m, kept between this cloth and other surfaces;
                                            # unset: default_thickness()
     self_collision: bool = True            # the cloth does not pass through itself
+    file: str = ""                         # a triangle or quad mesh; unset: the N x N grid
+    scale: float = 1.0                     # on the file's coordinates
+    material: ClothMaterial | None = None  # unset: particle_mass and per-kind ks, kd
+    pins: list[Pin] = field(default_factory=list)   # more pinned particles (bodies/pins.py)
 
     def validate(self, key: str) -> None:
-        n = self.particles_per_edge
-        require(isinstance(n, int) and n >= 2, f"{key}.particles_per_edge", n,
-                "needs an integer >= 2 (structural and shear springs join neighbours)")
-        require(n >= 3 or not self.bend.builds, f"{key}.particles_per_edge", n,
-                "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
-        for name in ("width", "height", "particle_mass"):
+        self._validate_shape(key)
+        for name in ("particle_mass",):
             value = getattr(self, name)
-            require(_positive(value), f"{key}.{name}", value,
-                    "must be > 0 " + ("kg" if name == "particle_mass" else "m"))
+            require(_positive(value), f"{key}.{name}", value, "must be > 0 kg")
         require(is_finite(self.drag) and self.drag >= 0, f"{key}.drag", self.drag,
                 "must be >= 0 N s/m")
         for name in ("position", "velocity", "rotation_axis"):
@@ -78,15 +95,36 @@ class Cloth(SurfaceContact):
         require_angle(self.rotation_degrees, f"{key}.rotation_degrees")
         for kind in ("structural", "shear", "bend"):
             getattr(self, kind).validate(f"{key}.{kind}")
+        if self.material is not None:
+            self.material.validate(f"{key}.material")
         self._validate_pinned(key)
+        for p, pin in enumerate(self.pins):
+            pin.validate(f"{key}.pins.{p}")
+        if self.pins:
+            pinned_mask(self.pins, self.particle_positions(), self._groups(), f"{key}.pins")
         self.validate_surface_contact(key)
+
+    def _validate_shape(self, key: str) -> None:
+        if self.file:
+            require(_positive(self.scale), f"{key}.scale", self.scale,
+                    "must be > 0 (a factor on the file's coordinates)")
+            _check_memory(self._file_vertex_count(f"{key}.file"), f"{key}.file", self.file)
+            return
+        n = self.particles_per_edge
+        require(isinstance(n, int) and n >= 2, f"{key}.particles_per_edge", n,
+                "needs an integer >= 2 (structural and shear springs join neighbours)")
+        require(n >= 3 or not self.bend.builds, f"{key}.particles_per_edge", n,
+                "needs >= 3 for bend springs, which skip one particle (or set bend ks and kd to 0)")
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            require(_positive(value), f"{key}.{name}", value, "must be > 0 m")
 
     def _validate_pinned(self, key: str) -> None:
         if isinstance(self.pinned, str):
             require(self.pinned in PINNINGS, f"{key}.pinned", self.pinned,
                     "must be one of " + ", ".join(PINNINGS) + " or a list of particle numbers")
             return
-        count = self.particles_per_edge ** 2
+        count = self.counts()[0]
         require(isinstance(self.pinned, (list, tuple)), f"{key}.pinned", self.pinned,
                 "must be one of " + ", ".join(PINNINGS) + " or a list of particle numbers")
         for index in self.pinned:
@@ -95,7 +133,13 @@ class Cloth(SurfaceContact):
                     f"particle numbers must be whole numbers in [0, {count - 1}]")
 
     def surface_spacing(self) -> float:
-        return min(self.width, self.height) / (self.particles_per_edge - 1)
+        """The grid's spacing; for a mesh, its shorter edges' length (the 5th percentile)."""
+        if not self.file:
+            return min(self.width, self.height) / (self.particles_per_edge - 1)
+        sheet, positions = self.sheet(), self.rest_positions()
+        edges = sheet_springs(sheet.faces, len(positions))[SpringKind.STRUCTURAL]
+        lengths = np.linalg.norm(positions[edges[:, 0]] - positions[edges[:, 1]], axis=1)
+        return float(np.percentile(lengths, 5)) if len(lengths) else 1.0
 
     def default_thickness(self) -> float:
         """2 cm, or a quarter of the particle spacing where that is less. Why: a self-colliding
@@ -105,38 +149,88 @@ class Cloth(SurfaceContact):
         return min(0.02, 0.25 * self.surface_spacing())
 
     def counts(self) -> tuple[int, int]:
-        """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone."""
+        """Particles and springs (at most: kinds with ks = kd = 0 build none), from N alone or
+        from the mesh file."""
+        if self.file:
+            sheet = self.sheet()
+            springs = sheet_springs(sheet.faces, len(sheet.positions))
+            return len(sheet.positions), sum(len(pairs) for pairs in springs.values())
         n = self.particles_per_edge
         return n * n, 2 * n * (n - 1) + 2 * (n - 1) ** 2 + 2 * n * max(n - 2, 0)
 
     def build(self) -> BuiltBody:
-        n = self.particles_per_edge
-        index = np.arange(n * n, dtype=np.int32).reshape(n, n)
-        springs, kinds = [], []
-        for kind, offsets, params in ((SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, self.structural),
-                                      (SpringKind.SHEAR, SHEAR_OFFSETS, self.shear),
-                                      (SpringKind.BEND, BEND_OFFSETS, self.bend)):
-            if not params.builds:
-                continue
-            for offset in offsets:
-                pairs = lattice_springs(index, offset)
-                springs.append(pairs)
-                kinds.append(np.full(len(pairs), kind, np.int8))
+        positions = self.particle_positions()
+        faces = self.faces()
+        springs, kinds = self._springs(faces, len(positions))
+        count = len(positions)
+        masses = np.full(count, float(self.particle_mass))
+        constants = None
+        if self.material is not None:
+            masses = lumped_masses(self.rest_positions(), faces, self.material.density)
+            constants = material_constants(self.material, self.rest_positions(), faces,
+                                           springs, kinds)
+        pinned = self.pinned_mask()
+        if self.pins:
+            pinned |= pinned_mask(self.pins, positions, self._groups(), "pins")
+        in_no_face = np.bincount(faces[faces >= 0], minlength=count) == 0
+        pinned |= in_no_face             # it has no spring to move with
+        masses[in_no_face] = float(self.particle_mass)
+        triangles = fan_triangles(faces).astype(np.int32)
+        surface, embedding, collision_surface = triangles, None, None
+        if self.file and self._has_seams():
+            surface, embedding, collision_surface = self._file_surface(), self._seam_embedding(), \
+                triangles
         return BuiltBody(
-            positions=self.particle_positions(),
-            velocities=np.tile(np.asarray(self.velocity, float), (n * n, 1)),
-            masses=np.full(n * n, float(self.particle_mass)),
-            pinned=self.pinned_mask(),
-            springs=np.concatenate(springs) if springs else np.empty((0, 2), np.int32),
-            spring_kind=np.concatenate(kinds) if kinds else np.empty(0, np.int8),
+            positions=positions,
+            velocities=np.tile(np.asarray(self.velocity, float), (count, 1)),
+            masses=masses, pinned=pinned, springs=springs, spring_kind=kinds,
             spring_parameters={SpringKind.STRUCTURAL: self.structural,
                                SpringKind.SHEAR: self.shear, SpringKind.BEND: self.bend},
-            surface=grid_triangles(index),
-            radii=np.zeros(n * n),
-        )
+            surface=surface, radii=np.zeros(count), embedding=embedding,
+            collision_surface=collision_surface, spring_constants=constants, sheet=True)
+
+    def _springs(self, faces, count):
+        """(S, 2) springs and (S,) kinds, kind by kind; kinds with ks = kd = 0 build none
+        (with a material: a zero stiffness and damping)."""
+        if self.file:
+            by_kind = sheet_springs(faces, count)
+        else:
+            n = self.particles_per_edge
+            index = np.arange(n * n, dtype=np.int32).reshape(n, n)
+            by_kind = {kind: np.concatenate([lattice_springs(index, offset)
+                                             for offset in offsets])
+                       for kind, offsets in ((SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS),
+                                             (SpringKind.SHEAR, SHEAR_OFFSETS),
+                                             (SpringKind.BEND, BEND_OFFSETS))}
+        springs, kinds = [], []
+        for kind, pairs in by_kind.items():
+            if self.material is not None:
+                builds = any(self.material.per_kind(kind))
+            else:
+                builds = getattr(self, SpringKind(kind).label).builds
+            if builds and len(pairs):
+                springs.append(pairs.astype(np.int32))
+                kinds.append(np.full(len(pairs), kind, np.int8))
+        if not springs:
+            return np.empty((0, 2), np.int32), np.empty(0, np.int8)
+        return np.concatenate(springs), np.concatenate(kinds)
+
+    def faces(self) -> np.ndarray:
+        """(F, K) the sheet's faces as rows of particle numbers (the grid's cells as quads)."""
+        if self.file:
+            return self.sheet().faces
+        n = self.particles_per_edge
+        index = np.arange(n * n).reshape(n, n)
+        return np.stack([index[:-1, :-1].ravel(), index[1:, :-1].ravel(),
+                         index[1:, 1:].ravel(), index[:-1, 1:].ravel()], axis=1)
 
     def particle_positions(self) -> np.ndarray:
-        """(N^2, 3) positions in m, particle i N + j at row i (local z) and column j (local x)."""
+        """(P, 3) positions in m: for the grid, particle i N + j at row i (local z) and column j
+        (local x); for a mesh, its welded vertices, placed."""
+        if self.file:
+            sheet = self.sheet()
+            return placed(_as_triangle_mesh(sheet.positions), self.scale, self.rotation_degrees,
+                          self.rotation_axis, self.position).vertices
         n = self.particles_per_edge
         fraction = np.linspace(-0.5, 0.5, n)
         row, column = np.meshgrid(fraction, fraction, indexing="ij")
@@ -148,7 +242,16 @@ class Cloth(SurfaceContact):
             local = Rotation.from_rotvec(rotvec).apply(local)
         return local + np.asarray(self.position, float)
 
+    def rest_positions(self) -> np.ndarray:
+        """The particles scaled but neither turned nor moved: the frame named pinnings and the
+        material's areas use (areas and lengths do not change when placed)."""
+        if self.file:
+            return float(self.scale) * self.sheet().positions
+        return self.particle_positions()
+
     def pinned_mask(self) -> np.ndarray:
+        if self.file:
+            return self._named_mesh_pins()
         n = self.particles_per_edge
         grid = np.zeros((n, n), bool)
         if isinstance(self.pinned, str):
@@ -160,6 +263,80 @@ class Cloth(SurfaceContact):
         mask = grid.ravel()
         mask[list(self.pinned)] = True
         return mask
+
+    # --- a mesh file's sheet -----------------------------------------------------------------
+
+    def sheet(self) -> SheetMesh:
+        """The welded mesh of ``file`` (bodies/sheet_mesh.py), built once per file version."""
+        read_mesh_file(self.file, "file")     # a missing or unreadable file fails here
+        path = Path(self.file).expanduser().resolve()
+        status = path.stat()
+        return _cached_sheet(str(path), status.st_mtime_ns, status.st_size)
+
+    def _file_vertex_count(self, key: str) -> int:
+        return len(read_mesh_file(self.file, key).vertices)
+
+    def _has_seams(self) -> bool:
+        mapping = self.sheet().of_file_vertex
+        return not np.array_equal(mapping, np.arange(len(mapping)))
+
+    def _file_surface(self) -> np.ndarray:
+        """The file's own faces as triangles of its own vertices: what exporters write, so that
+        a point cache applies to the file as the artist has it (seam duplicates included)."""
+        return self.sheet().file_triangles.astype(np.int32)
+
+    def _seam_embedding(self) -> Embedding:
+        """Each file vertex follows its welded particle (a one-hot embedding)."""
+        particle = self.sheet().of_file_vertex
+        particles = np.repeat(particle[:, None], 8, axis=1)
+        weights = np.zeros((len(particle), 8))
+        weights[:, 0] = 1.0
+        return Embedding(particles, weights)
+
+    def _named_mesh_pins(self) -> np.ndarray:
+        """``pinned`` on a mesh, in the file's frame (module doc)."""
+        local = self.rest_positions()
+        mask = np.zeros(len(local), bool)
+        if isinstance(self.pinned, (list, tuple)):
+            mask[list(self.pinned)] = True
+            return mask
+        low, high = local.min(axis=0), local.max(axis=0)
+        tolerance = 1e-6 * float(np.max(high - low))
+        if self.pinned == "corners":
+            for x in (low[0], high[0]):
+                for z in (low[2], high[2]):
+                    distance = np.hypot(local[:, 0] - x, local[:, 2] - z)
+                    mask[np.argmin(distance)] = True
+        elif self.pinned != "none":
+            name = "edge+z" if self.pinned == "edge" else self.pinned
+            axis = 0 if name[-1] == "x" else 2
+            bound = high[axis] if name[-2] == "+" else low[axis]
+            mask |= np.abs(local[:, axis] - bound) <= tolerance
+        return mask
+
+    def _groups(self) -> dict:
+        """The mesh file's named groups of particles, for ``pins``."""
+        return self.sheet().groups if self.file else {}
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_sheet(path: str, mtime_ns: int, size: int) -> SheetMesh:
+    return sheet_mesh(read_mesh_file(path, "file"))
+
+
+def _as_triangle_mesh(vertices):
+    from ..meshfiles import TriangleMesh
+    return TriangleMesh(vertices, np.empty((0, 3), np.int64))
+
+
+def _check_memory(vertices: int, key: str, file: str) -> None:
+    """Refuse a mesh whose cloth the machine could not hold, from its vertex count alone."""
+    memory = machine_memory()
+    needed = BYTES_PER_PARTICLE * 8 * vertices      # particles, and about 7 springs each
+    if memory is not None and needed > 0.75 * memory:
+        raise SceneError(key, file, f"has {vertices:,} vertices, about {gigabytes(needed)} to "
+                                    f"simulate as a cloth; this machine has "
+                                    f"{gigabytes(memory)} of memory")
 
 
 def _positive(value) -> bool:

@@ -1,0 +1,126 @@
+"""A cloth's particles and springs from any triangle or quad mesh (``type = "cloth"`` with a
+``file``).
+
+- Particles: the file's vertices welded by position (a file splits a vertex along its UV and
+  normal seams; a cloth must not tear there), numbered in the order they first appear in the file,
+  so a file without seams keeps its own vertex numbers.
+- Springs, as a cloth's grid has them: *structural* along every edge of every face; *shear*
+  across both diagonals of every quad (a triangle's edges already resist shear); *bend* between
+  the two vertices opposite an interior edge shared by two triangles, and, where quads meet at a
+  vertex, between each two of its quad neighbours that share no quad with it (on a quad grid: the
+  straight vertex lines, one cell to each side, as the grid's +2 springs). A pair joined by a
+  spring of an earlier kind gets no second one.
+- On a quad grid written in the grid's order this gives the grid cloth's particles, springs and
+  triangles exactly (tests/test_cloth_mesh.py).
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ..meshfiles import MeshFile, fan_triangles, weld
+from ..springs import SpringKind
+
+
+class SheetMesh(NamedTuple):
+    positions: np.ndarray       # (W, 3) welded vertices, m, in the file's frame
+    faces: np.ndarray           # (F, K) rows of welded vertices, padded with -1
+    groups: dict                # name -> welded vertex numbers
+    of_file_vertex: np.ndarray  # (V,) the welded vertex (particle) of each file vertex
+    file_triangles: np.ndarray  # (T, 3) the file's faces as triangles of file vertices
+
+
+def sheet_mesh(mesh: MeshFile) -> SheetMesh:
+    """The welded sheet of ``mesh``; faces that collapse when welded (a repeated corner) go."""
+    welded = weld(mesh.vertices)
+    faces = np.where(mesh.faces >= 0, welded.of_file_vertex[np.maximum(mesh.faces, 0)], -1)
+    groups = {name: np.unique(welded.of_file_vertex[members])
+              for name, members in mesh.groups.items()}
+    return SheetMesh(welded.vertices, faces[_distinct_corners(faces)], groups,
+                     welded.of_file_vertex, fan_triangles(mesh.faces))
+
+
+def _distinct_corners(faces: np.ndarray) -> np.ndarray:
+    ordered = np.sort(faces, axis=1)
+    repeated = (ordered[:, 1:] == ordered[:, :-1]) & (ordered[:, 1:] >= 0)
+    return ~repeated.any(axis=1)
+
+
+def corner_count(faces: np.ndarray) -> np.ndarray:
+    return np.count_nonzero(faces >= 0, axis=1)
+
+
+def face_edges(faces: np.ndarray) -> np.ndarray:
+    """(E, 2) the directed edges of every face, corner k to corner k + 1 (the last to the
+    first), face by face."""
+    count = corner_count(faces)
+    following = np.roll(faces, -1, axis=1)
+    following[np.arange(len(faces)), count - 1] = faces[:, 0]
+    valid = faces >= 0
+    return np.stack([faces[valid], following[valid]], axis=1)
+
+
+def sheet_springs(faces: np.ndarray, particle_count: int) -> dict:
+    """SpringKind -> (S, 2) int32 springs (lower particle first, in ascending order)."""
+    quads = faces[corner_count(faces) == 4][:, :4]
+    triangles = faces[corner_count(faces) == 3][:, :3]
+    kinds = {SpringKind.STRUCTURAL: face_edges(faces),
+             SpringKind.SHEAR: np.concatenate([quads[:, [0, 2]], quads[:, [1, 3]]]),
+             SpringKind.BEND: np.concatenate([across_edges(triangles),
+                                              quad_lines(quads, particle_count)])}
+    built, taken = {}, np.empty(0, np.int64)
+    for kind, pairs in kinds.items():
+        pairs = np.sort(pairs.reshape(-1, 2), axis=1).astype(np.int64)
+        codes = np.unique(pairs[:, 0] * particle_count + pairs[:, 1])
+        codes = codes[~np.isin(codes, taken)]
+        taken = np.concatenate([taken, codes])
+        built[kind] = np.stack([codes // particle_count, codes % particle_count],
+                               axis=1).astype(np.int32)
+    return built
+
+
+def across_edges(triangles: np.ndarray) -> np.ndarray:
+    """(B, 2) for each edge shared by exactly two triangles, their two corners off the edge."""
+    if len(triangles) == 0:
+        return np.empty((0, 2), np.int64)
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    opposite = np.concatenate([triangles[:, 2], triangles[:, 0], triangles[:, 1]])
+    _, edge, counts = np.unique(np.sort(edges, axis=1), axis=0, return_inverse=True,
+                                return_counts=True)
+    edge = edge.ravel()
+    shared = counts[edge] == 2
+    order = np.argsort(edge[shared], kind="stable")
+    corners = opposite[shared][order].reshape(-1, 2)
+    return corners[corners[:, 0] != corners[:, 1]]
+
+
+def quad_lines(quads: np.ndarray, particle_count: int) -> np.ndarray:
+    """(B, 2) for each vertex of a quad, the pairs of its quad neighbours that share no quad
+    with it: across the vertex along a straight line of a quad grid."""
+    if len(quads) == 0:
+        return np.empty((0, 2), np.int64)
+    n = np.int64(particle_count)
+    centre = quads.ravel()
+    before, after = np.roll(quads, 1, axis=1).ravel(), np.roll(quads, -1, axis=1).ravel()
+    neighbours = np.unique(np.concatenate([np.stack([centre, before], 1),
+                                           np.stack([centre, after], 1)]), axis=0)
+    low, high = np.minimum(before, after), np.maximum(before, after)
+    adjacent = np.unique((centre * n + low) * n + high)
+    pairs = []
+    vertex = neighbours[:, 0]
+    for shift in range(1, int(np.bincount(vertex).max(initial=1))):
+        same = vertex[shift:] == vertex[:-shift]
+        a, b = neighbours[:-shift][same, 1], neighbours[shift:][same, 1]
+        code = (vertex[shift:][same] * n + np.minimum(a, b)) * n + np.maximum(a, b)
+        keep = ~np.isin(code, adjacent)
+        pairs.append(np.stack([a[keep], b[keep]], axis=1))
+    return np.concatenate(pairs) if pairs else np.empty((0, 2), np.int64)
+
+
+def polygon_areas(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(F,) m^2: each face's area, as the sum of its fan triangles' areas."""
+    area = np.zeros(len(faces))
+    for k in range(1, faces.shape[1] - 1):
+        has = faces[:, k + 1] >= 0
+        a, b, c = (positions[faces[has][:, j]] for j in (0, k, k + 1))
+        area[has] += 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    return area
