@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import is_finite, require
 from ..springs import SpringKind
-from .sheet_mesh import corner_count, face_edges, polygon_areas
+from .sheet_mesh import corner_count, face_edges, faces_of, polygon_areas
 
 
 @dataclass
@@ -75,10 +75,10 @@ def spring_areas(positions, faces, springs: np.ndarray, kinds: np.ndarray) -> np
     share = np.repeat(np.where(count == 3, face_area, 0.5 * face_area), count)
     _add_by_code(areas, kinds == SpringKind.STRUCTURAL, code, edges, share, n)
     # shear: a quad gives twice its area to each diagonal
-    quads = count == 4
-    diagonals = np.concatenate([faces[quads][:, [0, 2]], faces[quads][:, [1, 3]]])
+    quads = faces_of(faces, 4)
+    diagonals = np.concatenate([quads[:, [0, 2]], quads[:, [1, 3]]])
     _add_by_code(areas, kinds == SpringKind.SHEAR, code, diagonals,
-                 np.tile(2.0 * face_area[quads], 2), n)
+                 np.tile(2.0 * face_area[count == 4], 2), n)
     return areas
 
 

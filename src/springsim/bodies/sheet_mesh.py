@@ -49,6 +49,13 @@ def corner_count(faces: np.ndarray) -> np.ndarray:
     return np.count_nonzero(faces >= 0, axis=1)
 
 
+def faces_of(faces: np.ndarray, corners: int) -> np.ndarray:
+    """(n, corners) the faces that have ``corners`` corners."""
+    if faces.shape[1] < corners:
+        return np.empty((0, corners), np.int64)
+    return faces[corner_count(faces) == corners][:, :corners]
+
+
 def face_edges(faces: np.ndarray) -> np.ndarray:
     """(E, 2) the directed edges of every face, corner k to corner k + 1 (the last to the
     first), face by face."""
@@ -61,8 +68,7 @@ def face_edges(faces: np.ndarray) -> np.ndarray:
 
 def sheet_springs(faces: np.ndarray, particle_count: int) -> dict:
     """SpringKind -> (S, 2) int32 springs (lower particle first, in ascending order)."""
-    quads = faces[corner_count(faces) == 4][:, :4]
-    triangles = faces[corner_count(faces) == 3][:, :3]
+    quads, triangles = faces_of(faces, 4), faces_of(faces, 3)
     kinds = {SpringKind.STRUCTURAL: face_edges(faces),
              SpringKind.SHEAR: np.concatenate([quads[:, [0, 2]], quads[:, [1, 3]]]),
              SpringKind.BEND: np.concatenate([across_edges(triangles),
@@ -94,26 +100,27 @@ def across_edges(triangles: np.ndarray) -> np.ndarray:
 
 
 def quad_lines(quads: np.ndarray, particle_count: int) -> np.ndarray:
-    """(B, 2) for each vertex of a quad, the pairs of its quad neighbours that share no quad
-    with it: across the vertex along a straight line of a quad grid."""
+    """(B, 2) for each vertex v of the quads, the pairs (a, b) of its neighbours that lie on
+    either side of a third neighbour c (a and c share a quad with v, and so do c and b) but
+    share no quad with v themselves: the straight line a-v-b of a quad grid, also along its
+    border and around a hole's corner (where a and b on the two sides of the hole have no c)."""
     if len(quads) == 0:
         return np.empty((0, 2), np.int64)
     n = np.int64(particle_count)
     centre = quads.ravel()
     before, after = np.roll(quads, 1, axis=1).ravel(), np.roll(quads, -1, axis=1).ravel()
-    neighbours = np.unique(np.concatenate([np.stack([centre, before], 1),
-                                           np.stack([centre, after], 1)]), axis=0)
-    low, high = np.minimum(before, after), np.maximum(before, after)
-    adjacent = np.unique((centre * n + low) * n + high)
-    pairs = []
-    vertex = neighbours[:, 0]
-    for shift in range(1, int(np.bincount(vertex).max(initial=1))):
-        same = vertex[shift:] == vertex[:-shift]
-        a, b = neighbours[:-shift][same, 1], neighbours[shift:][same, 1]
-        code = (vertex[shift:][same] * n + np.minimum(a, b)) * n + np.maximum(a, b)
-        keep = ~np.isin(code, adjacent)
-        pairs.append(np.stack([a[keep], b[keep]], axis=1))
-    return np.concatenate(pairs) if pairs else np.empty((0, 2), np.int64)
+    # around v, c's partners: the neighbours that share a quad with v and c
+    entries = np.unique(np.concatenate([np.stack([centre, after, before], 1),
+                                        np.stack([centre, before, after], 1)]), axis=0)
+    key = entries[:, 0] * n + entries[:, 1]
+    # groups of exactly two entries (a manifold vertex: c has a quad on each side)
+    two = np.flatnonzero((key[1:] == key[:-1]) & np.r_[key[2:] != key[1:-1], True]
+                         & np.r_[True, key[1:-1] != key[:-2]])
+    a, b, v = entries[two, 2], entries[two + 1, 2], entries[two, 0]
+    adjacent = np.unique((centre * n + np.minimum(before, after)) * n + np.maximum(before, after))
+    code = (v * n + np.minimum(a, b)) * n + np.maximum(a, b)
+    keep = ~np.isin(code, adjacent)
+    return np.stack([a[keep], b[keep]], axis=1)
 
 
 def polygon_areas(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
