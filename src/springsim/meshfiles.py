@@ -150,11 +150,14 @@ def read_mesh_file(file: str, key: str) -> MeshFile:
         "" if path.is_absolute() else f" (relative to {Path.cwd()}; in a scene file a "
         "relative path is relative to the scene file's folder)"))
     stat = path.stat()
-    return _read_file(str(path.resolve()), stat.st_mtime_ns, stat.st_size, key)
+    try:
+        return _read_file(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    except SceneError as error:   # read once whatever key asks; the error names the asker's
+        raise SceneError(key, error.value, error.allowed) from None
 
 
 @functools.lru_cache(maxsize=16)
-def _read_file(path: str, mtime_ns: int, size: int, key: str) -> MeshFile:
+def _read_file(path: str, mtime_ns: int, size: int, key: str = "file") -> MeshFile:
     if path.lower().endswith(".obj"):
         mesh = _read_obj(path, key)
     else:
@@ -249,10 +252,19 @@ def weld(vertices: np.ndarray, tolerance: float = 1e-9) -> Welded:
     """Vertices at the same position (within ``tolerance`` of the mesh's size) made one: a file
     splits a vertex along its UV and normal seams, and a body or cloth must not split there."""
     size = float(np.max(np.ptp(vertices, axis=0))) if len(vertices) else 0.0
-    keys = np.round(vertices / max(tolerance * size, 1e-300)).astype(np.int64) if size else \
+    quantum = max(tolerance * size, 1e-300)
+    cells = np.round(vertices / quantum).astype(np.int64) if size else \
         np.zeros((len(vertices), 3), np.int64)
-    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    order = np.lexsort(cells.T[::-1])                   # by x, then y, then z: a fast sort
+    ordered = cells[order]
+    starts = np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)] if len(cells) else \
+        np.zeros(0, bool)
+    group = np.cumsum(starts) - 1
+    inverse = np.empty(len(cells), np.int64)
+    inverse[order] = group
+    first = np.full(int(starts.sum()), len(cells), np.int64)
+    np.minimum.at(first, group, order)                  # each position's first file vertex
     # number the distinct positions in order of their first appearance in the file
     rank = np.empty(len(first), np.int64)
     rank[np.argsort(first, kind="stable")] = np.arange(len(first))
-    return Welded(vertices[np.sort(first)], rank[inverse.ravel()])
+    return Welded(vertices[np.sort(first)], rank[inverse])

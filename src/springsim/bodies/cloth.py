@@ -36,7 +36,7 @@ from ..surfaces import Embedding
 from . import BuiltBody
 from .cloth_material import ClothMaterial, lumped_masses, material_constants
 from .pins import Pin, pinned_mask
-from .sheet_mesh import SheetMesh, sheet_mesh, sheet_springs
+from .sheet_mesh import SheetMesh, sheet_mesh
 from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((0, 1), (1, 0))
@@ -136,8 +136,8 @@ class Cloth(SurfaceContact):
         """The grid's spacing; for a mesh, its shorter edges' length (the 5th percentile)."""
         if not self.file:
             return min(self.width, self.height) / (self.particles_per_edge - 1)
-        sheet, positions = self.sheet(), self.rest_positions()
-        edges = sheet_springs(sheet.faces, len(positions))[SpringKind.STRUCTURAL]
+        positions = self.rest_positions()
+        edges = self.sheet().springs[SpringKind.STRUCTURAL]
         lengths = np.linalg.norm(positions[edges[:, 0]] - positions[edges[:, 1]], axis=1)
         return float(np.percentile(lengths, 5)) if len(lengths) else 1.0
 
@@ -153,8 +153,7 @@ class Cloth(SurfaceContact):
         from the mesh file."""
         if self.file:
             sheet = self.sheet()
-            springs = sheet_springs(sheet.faces, len(sheet.positions))
-            return len(sheet.positions), sum(len(pairs) for pairs in springs.values())
+            return len(sheet.positions), sum(len(pairs) for pairs in sheet.springs.values())
         n = self.particles_per_edge
         return n * n, 2 * n * (n - 1) + 2 * (n - 1) ** 2 + 2 * n * max(n - 2, 0)
 
@@ -193,7 +192,7 @@ class Cloth(SurfaceContact):
         """(S, 2) springs and (S,) kinds, kind by kind; kinds with ks = kd = 0 build none
         (with a material: a zero stiffness and damping)."""
         if self.file:
-            by_kind = sheet_springs(faces, count)
+            by_kind = self.sheet().springs
         else:
             n = self.particles_per_edge
             index = np.arange(n * n, dtype=np.int32).reshape(n, n)

@@ -27,6 +27,7 @@ class SheetMesh(NamedTuple):
     groups: dict                # name -> welded vertex numbers
     of_file_vertex: np.ndarray  # (V,) the welded vertex (particle) of each file vertex
     file_triangles: np.ndarray  # (T, 3) the file's faces as triangles of file vertices
+    springs: dict               # SpringKind -> (S, 2) int32 (sheet_springs)
 
 
 def sheet_mesh(mesh: MeshFile) -> SheetMesh:
@@ -35,8 +36,9 @@ def sheet_mesh(mesh: MeshFile) -> SheetMesh:
     faces = np.where(mesh.faces >= 0, welded.of_file_vertex[np.maximum(mesh.faces, 0)], -1)
     groups = {name: np.unique(welded.of_file_vertex[members])
               for name, members in mesh.groups.items()}
-    return SheetMesh(welded.vertices, faces[_distinct_corners(faces)], groups,
-                     welded.of_file_vertex, fan_triangles(mesh.faces))
+    faces = faces[_distinct_corners(faces)]
+    return SheetMesh(welded.vertices, faces, groups, welded.of_file_vertex,
+                     fan_triangles(mesh.faces), sheet_springs(faces, len(welded.vertices)))
 
 
 def _distinct_corners(faces: np.ndarray) -> np.ndarray:
@@ -90,9 +92,9 @@ def across_edges(triangles: np.ndarray) -> np.ndarray:
         return np.empty((0, 2), np.int64)
     edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
     opposite = np.concatenate([triangles[:, 2], triangles[:, 0], triangles[:, 1]])
-    _, edge, counts = np.unique(np.sort(edges, axis=1), axis=0, return_inverse=True,
-                                return_counts=True)
-    edge = edge.ravel()
+    n = np.int64(triangles.max() + 1)
+    code = np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1])
+    _, edge, counts = np.unique(code, return_inverse=True, return_counts=True)
     shared = counts[edge] == 2
     order = np.argsort(edge[shared], kind="stable")
     corners = opposite[shared][order].reshape(-1, 2)
