@@ -51,7 +51,13 @@ def unwelded() -> tuple[np.ndarray, np.ndarray]:
                 faces.append((a, b, a + 1))
             if i < rows - 1:
                 faces.append((a + 1, b, b + 1))
-    return np.array(vertices), np.array(faces)
+    # the seam copy of each pole is on no face: leave it out, as exporters do (Blender's OBJ
+    # importer drops a vertex on no face, and its Mesh Cache then counts one fewer)
+    faces = np.array(faces)
+    used = np.unique(faces)
+    renumber = np.full(len(vertices), -1)
+    renumber[used] = np.arange(len(used))
+    return np.array(vertices)[used], renumber[faces]
 
 
 def open_scan() -> trimesh.Trimesh:
