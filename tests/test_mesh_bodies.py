@@ -122,28 +122,29 @@ def test_bad_meshes_are_refused_with_one_line(meshes, tmp_path):
 
     (tmp_path / "text.obj").write_text("this is not a mesh\n")
     (tmp_path / "bytes.stl").write_bytes(b"\x00\x01garbage" * 10)
-    for name in ("text.obj", "bytes.stl"):
+    (tmp_path / "empty.obj").write_text("")
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\n"
+                                      "f 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n")
+    for name in ("text.obj", "bytes.stl", "empty.obj", "nan.obj"):
         error = refusal(MeshBody(file=str(tmp_path / name)))
         assert error.key == "bodies.0.file"
+    assert "not finite" in refusal(MeshBody(file=str(tmp_path / "nan.obj"))).allowed
 
-    box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
-    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2])
-    open_box.export(tmp_path / "open.obj")
-    assert "not watertight" in refusal(MeshBody(file=str(tmp_path / "open.obj"))).allowed
+    # a single open sheet has no inside: it is a cloth
+    sheet = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]], [[0, 2, 1], [0, 3, 2]])
+    sheet.export(tmp_path / "sheet.obj")
+    error = refusal(MeshBody(file=str(tmp_path / "sheet.obj")))
+    assert error.key == "bodies.0.file" and 'type = "cloth"' in error.allowed
 
-    inverted = box.copy()
-    inverted.invert()
-    inverted.export(tmp_path / "inverted.obj")
-    assert "no volume" in refusal(MeshBody(file=str(tmp_path / "inverted.obj"))).allowed
-
-    flat = trimesh.Trimesh(np.vstack([box.vertices, [[0.0, 0.0, 0.0]]]),
-                           np.vstack([box.faces, [[0, 0, 8]]]), process=False)
-    flat.export(tmp_path / "degenerate.ply")
-    assert "degenerate" in refusal(MeshBody(file=str(tmp_path / "degenerate.ply"))).allowed
-
-    error = refusal(MeshBody(file=str(meshes / "box.obj"), spacing=5.0))
-    assert error.key == "bodies.0.spacing" and "too large for the mesh" in error.allowed
-    assert "try <= 1" in error.allowed
+    for particles in (0, 7, 10**8):
+        error = refusal(MeshBody(file=str(meshes / "box.obj"), particles=particles))
+        assert error.key == "bodies.0.particles" and "[8, 10,000,000]" in error.allowed
+    for particles in (2.5, True):
+        error = refusal(MeshBody(file=str(meshes / "box.obj"), particles=particles))
+        assert error.key == "bodies.0.particles" and "whole number" in error.allowed
+    for spacing in ("fine", -1.0, 0.0):
+        error = refusal(MeshBody(file=str(meshes / "box.obj"), spacing=spacing))
+        assert error.key == "bodies.0.spacing"
 
 
 def test_a_lattice_too_large_for_memory_is_refused_before_it_is_built(meshes):
@@ -162,13 +163,17 @@ def test_surfaces_give_balls_as_centres_and_radii():
 
 @pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply", ".off", ".glb", ".gltf"])
 def test_every_format_reads_as_the_same_mesh(tmp_path, suffix):
+    """The same box in every format: the same solid once welded (STL repeats each corner per
+    triangle), and the same particles."""
     box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
     path = tmp_path / f"box{suffix}"
     box.export(path)
     body = MeshBody(file=str(path), spacing=0.25)
     body.validate("bodies.0")
-    assert body.mesh().vertices.shape == (8, 3)
-    np.testing.assert_allclose(np.sort(body.mesh().vertices, axis=0), np.sort(box.vertices, axis=0))
+    assert body.solid().vertices.shape == (8, 3)
+    np.testing.assert_allclose(np.sort(body.solid().vertices, axis=0),
+                               np.sort(box.vertices, axis=0))
+    assert len(body.lattice().positions) == 5 * 9 * 13
 
 
 def test_the_command_line_refuses_a_bad_mesh_in_one_line(tmp_path):
@@ -180,17 +185,3 @@ def test_the_command_line_refuses_a_bad_mesh_in_one_line(tmp_path):
     assert "bodies.0.file" in result.stderr and "no such file" in result.stderr
 
 
-def test_vertices_in_parts_too_thin_for_the_lattice_are_counted_in_a_warning(tmp_path):
-    """A 2 m box and, 0.5 m beside it, a 5 cm one: at spacing 0.25 m the small box holds no
-    lattice point, so its 8 vertices ride the big box's nearest full cell (still exact at t = 0)."""
-    from springsim.bodies.mesh import ThinPartsWarning
-
-    big = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
-    small = trimesh.creation.box(extents=(0.05, 0.05, 0.05))
-    small.apply_translation((1.5, 0.0, 0.0))
-    trimesh.util.concatenate([big, small]).export(tmp_path / "two.obj")
-    body = MeshBody(file=str(tmp_path / "two.obj"), spacing=0.25, position=(0.0, 3.0, 0.0))
-    with pytest.warns(ThinPartsWarning, match="8 of 16 vertices"):
-        simulation = springsim.Simulation(Scene(bodies=[body], terrains=[Plane()]))
-    np.testing.assert_allclose(simulation.surfaces()[0].vertices, body.mesh().vertices,
-                               atol=1e-12)

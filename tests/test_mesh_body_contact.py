@@ -57,7 +57,7 @@ def check_closed_surface(body: MeshBody, manifold: bool):
     built = body.build()
     triangles = built.collision_surface.astype(np.int64)
     x = built.positions
-    _, index, _, _ = body.lattice()
+    index = body.lattice().index
     # non-degenerate: half a lattice square each
     corners = x[triangles]
     areas = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
@@ -107,15 +107,17 @@ def test_the_torus_boundary_is_closed_and_manifold():
 
 
 def test_the_jelly_torus_boundary_is_closed():
-    """Tilted as in the preset, two full cells meet along a lattice edge only at a few places
+    """Tilted as in the preset, two full cells may meet along a lattice edge only at a few places
     (no full cell on the other two sides): that edge bounds four triangles, two from each
-    cell. Everywhere else every edge is in exactly two."""
+    cell. Everywhere else every edge is in exactly two. (Since the lattice keeps every cell the
+    surface passes through, issue 29, the shipped torus has no such edge; the check stays for
+    any that would.)"""
     body = jelly_torus()
     built, edges, counts = check_closed_surface(body, manifold=False)
-    _, index, _, _ = body.lattice()
+    index = body.lattice().index
     sites = np.argwhere(index >= 0)[np.argsort(index[index >= 0])]   # particle -> site
     pinched = edges[counts == 4]
-    assert 0 < len(pinched) <= 0.01 * len(edges)
+    assert len(pinched) <= 0.01 * len(edges)
     for a, b in pinched:
         step = sites[b] - sites[a]
         assert np.abs(step).sum() == 1   # a lattice edge, not a diagonal

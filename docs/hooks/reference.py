@@ -110,7 +110,9 @@ NOTES = {
     "bodies/balls/position_correction": ("", "share of a penetration removed each step"),
     "*/mesh/file": ("", "the mesh (OBJ, STL, PLY, OFF, GLB, GLTF); relative to the scene file's "
                         "folder"),
-    "bodies/mesh/spacing": ("m", "distance between lattice particles"),
+    "bodies/mesh/spacing": ("m", 'distance between lattice particles, or "auto": the spacing '
+                                 "(three significant digits) for about `particles` particles"),
+    "bodies/mesh/particles": ("", 'the particle budget of spacing = "auto"'),
     "*/mesh/scale": ("", "factor on the file's coordinates"),
     "*/mesh/rotation_degrees": ("degrees", "rotation about the file's origin, after scaling"),
     "*/mesh/rotation_axis": ("", "axis of that rotation (any length but zero)"),

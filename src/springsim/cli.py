@@ -8,6 +8,7 @@ import importlib
 import pkgutil
 import signal
 import sys
+import warnings
 
 from . import __version__, commands
 from .errors import OutputFailed, SceneError, SimulationDiverged
@@ -51,7 +52,7 @@ class Terminated(KeyboardInterrupt):
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        with terminate_like_interrupt(), quiet_overflow():
+        with terminate_like_interrupt(), quiet_overflow(), one_line_warnings(args.command):
             return args.handler(args)
     except (SceneError, SimulationDiverged, OutputFailed) as error:
         print(f"springsim {args.command}: {error}", file=sys.stderr)
@@ -61,6 +62,17 @@ def main(argv=None) -> int:
         terminated = isinstance(interrupt, Terminated)
         print("terminated" if terminated else "interrupted", file=sys.stderr)
         return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+@contextlib.contextmanager
+def one_line_warnings(command: str):
+    """Warnings as one line each, as errors are (Python's own format adds the source line)."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"springsim {command}: warning: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
 
 
 @contextlib.contextmanager

@@ -2,8 +2,10 @@
 import numpy as np
 
 
-def summary_lines(recording) -> list[str]:
-    """What a user wants to know after a run: how far and how fast it went, and how it ended."""
+def summary_lines(recording, bodies: list | tuple = ()) -> list[str]:
+    """What a user wants to know after a run: how far and how fast it went, and how it ended;
+    ``bodies``: (label, text) rows for bodies whose build chose something (a mesh body's
+    spacing)."""
     simulated = recording.time[-1] - recording.time[0]
     deepest = int(np.argmax(recording.penetration))
     total = recording.total_energy
@@ -24,6 +26,7 @@ def summary_lines(recording) -> list[str]:
         ("energy at the end", ", ".join(f"{name} {value:.6g} J"
                                         for name, value in final_energies.items())),
         ("total energy change", f"{total[-1] - total[0]:+.6g} J since t = {recording.time[0]:g} s"),
+        *bodies,
     ]
     heading = (f"{recording.scene}: {recording.integrator}, dt = {recording.dt:g} s, "
                f"{len(recording.mass)} particles, {len(recording.springs)} springs")

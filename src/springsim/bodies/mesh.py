@@ -1,66 +1,90 @@
-"""A jelly body from a closed triangle mesh: a lattice of particles filling the mesh, joined by
-the cube's springs, with the mesh's own surface riding the lattice.
+"""A jelly body from a triangle mesh as artists have them (closed or not, in one shell or many,
+with UV seams): a lattice of particles carrying the mesh, joined by the cube's springs, with the
+file's own surface riding the lattice.
 
-- The lattice: points at the placed mesh's bounding-box minimum corner plus whole multiples of
-  ``spacing``, kept when inside the mesh (a point within 1e-6 x spacing of the surface counts as
-  inside, so that a box's faces keep their points). Particles are numbered in lattice order (x
-  slowest, z fastest), as the cube's are, and joined by the cube's spring pattern where both ends
-  are kept: a 4 m box at spacing 4/9 is exactly the default cube.
+- The solid: the file's vertices are merged by position first (a file splits a vertex along its
+  UV and normal seams), and the body fills where the generalized winding number of the surface
+  says inside (lattice_fill.py), so holes, separate or overlapping shells and parts wound inside
+  out fill as a person would expect; one warning line (MeshWarning) says what was unusual. Only a
+  surface with no inside at all, a single open sheet, is refused (mesh_solid.py): that is a cloth.
+- The lattice (lattice_fill.py): cubic cells of side ``spacing`` centred on the placed mesh's
+  box; a cell is kept when the surface passes through it (a conservative voxelization) or its
+  centre is inside; the particles are the kept cells' corners, joined by the cube's spring
+  pattern where both ends are particles. A 4 m box at spacing 4/9 is exactly the default cube.
+  ``spacing = "auto"`` picks the spacing (to three significant digits) whose lattice has about
+  ``particles`` particles, so a model in millimetres or kilometres makes the same body.
 - The surface (the idea of Newton's soft grid with a visual mesh and MuJoCo's trilinear
-  flexcomp): each vertex of the mesh is a fixed trilinear combination of the eight corners of a
-  full lattice cell (all eight corners kept), computed once. A vertex in a full cell uses it; the
-  others (the surface passes through cells that are partly outside) use the nearest full cell,
-  with the weights extended beyond it. Trilinear weights reproduce any affine map, so at t = 0
-  the surface is the input mesh to round-off either way. A vertex farther than one spacing from
-  every full cell lies in a part too thin for the lattice; a warning says how many.
-- Contact: terrains push on the particles, and the surface reaches up to about a spacing beyond
-  the outer ones. Each particle therefore keeps a terrain at the distance of the farthest surface
-  vertex for which it is the nearest corner of its cell (its ``terrain_offsets``), as a ball keeps
-  its radius: every vertex lies within that distance of a particle that stays that far from the
-  terrain, so no vertex of a body at rest goes below it. Where the surface passes through the
-  particles (a box), the offsets are zero. Other bodies (body-body contact,
-  collision/shapes/surfaces.py) touch a mesh body through the boundary faces of its lattice, kept
-  ``thickness`` apart as any surface: the faces of full cells whose neighbour across the face is
-  not full, two triangles each (``collision_surface``, lattice_boundary). That boundary lies within
-  about a spacing inside the drawn surface (on it for a box), so another body may be seen to sink
-  up to about a spacing into the drawn mesh. Particles that are a corner of no full cell (thin
-  parts, and some points just inside a curved surface) are on no such face: they are not touched by
-  other bodies.
+  flexcomp): each vertex of the FILE, in the file's order and seam duplicates included, is a
+  fixed trilinear combination of the eight corners of the kept cell it lies in, computed once.
+  Every vertex lies in a kept cell, so its weights are in [0, 1]: the vertex is a convex
+  combination of its cell's corners and never leaves the lattice, however the body tumbles.
+  Trilinear weights reproduce any affine map, so at t = 0 the surface is the file's to
+  round-off. The exporters' point caches therefore list the file's own vertices in its order,
+  and apply to the same file opened in Blender or Houdini.
+- Separate parts: shells whose kept cells share no corner are separate pieces of particles with
+  no spring between them; they move independently, as one body. Like any body's own surface,
+  they do not collide with each other unless ``self_collision`` is on.
+- Contact: terrains push on the particles. A vertex being a convex combination of particles, no
+  vertex goes below a plane that no particle goes below, so the body keeps no extra distance from
+  terrains (its ``terrain_offsets`` are zero). The particles of cells the surface passes through
+  reach up to a spacing beyond it, so the drawn surface may rest up to about a spacing above the
+  floor, and dip into a curved terrain by no more than a cell's sag over its curvature. Other
+  bodies (body-body contact, collision/shapes/surfaces.py) touch a mesh body through the boundary
+  faces of its lattice, kept ``thickness`` apart as any surface: the faces of full cells whose
+  neighbour across the face is not full, two triangles each (``collision_surface``,
+  lattice_boundary). That boundary encloses the drawn surface, up to about a spacing outside it
+  (on it for a box).
 """
 import functools
+import math
 import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
+from ..collision.shapes.settings import SurfaceContact
 from ..errors import SceneError, is_finite, require
-from ..meshfiles import check_closed, placed, read_mesh, validate_placement
+from ..meshfiles import TriangleMesh, placed, read_mesh_file, validate_placement, weld
 from ..surfaces import Embedding
 from . import BuiltBody
 from .cube import LatticeSprings, lattice_pattern, spring_parameters
-from ..collision.shapes.settings import SurfaceContact
+from .lattice_fill import box_points, fill, full_cells, locate
+from .mesh_solid import has_inside, unusual
 
-INSIDE_TOLERANCE = 1e-6   # of the spacing: a lattice point this close to the surface is inside
-# memory per lattice point of the bounding box while testing it (positions, distances, closest
-# points), and per particle of the model (its springs, state and the integrators' work arrays)
+# memory per lattice point of the bounding box while filling it (centres, winding numbers, flags,
+# numbers), and per particle of the model (its springs, state and the integrators' work arrays)
 BYTES_PER_LATTICE_POINT = 120
 BYTES_PER_PARTICLE = 2000
+PARTICLES = (8, 10_000_000)      # the particle budget of spacing = "auto": allowed range
+AUTO_TOLERANCE = 0.1             # "about": the auto spacing's count within 10 % where it can
+AUTO_TRIES = 8
 
 
-class ThinPartsWarning(UserWarning):
-    """Some vertices of a mesh body lie in parts too thin for its lattice."""
+class MeshWarning(UserWarning):
+    """A mesh body's surface is unusual (holes, shells, parts wound inside out); it is filled."""
+
+
+class Lattice(NamedTuple):
+    positions: np.ndarray   # (n, 3) m, particles in lattice order
+    index: np.ndarray       # (lattice points) int64 particle numbers, -1 where none
+    embedding: Embedding    # one row per vertex of the file, in the file's order
+    spacing: float          # m: the spacing used (chosen, for "auto")
+    unusual: str            # what is unusual about the surface, '' when nothing
 
 
 @dataclass
 class MeshBody(LatticeSprings, SurfaceContact):
-    """A jelly body filling the closed mesh in ``file``, scaled, rotated (degrees about
+    """A jelly body carrying the mesh in ``file``, scaled, rotated (degrees about
     ``rotation_axis``, about the file's origin) and moved by ``position`` (m); ``spacing`` (m)
-    between lattice particles of ``particle_mass`` (kg); the cube's springs (LatticeSprings)."""
+    between lattice particles of ``particle_mass`` (kg), or "auto" for about ``particles`` of
+    them; the cube's springs (LatticeSprings)."""
 
     file: str = ""
-    spacing: float = 0.5
+    spacing: float | str = "auto"
+    particles: int = 2000
     scale: float = 1.0
     rotation_degrees: float = 0.0
     rotation_axis: tuple = (0.0, 1.0, 0.0)
@@ -71,71 +95,88 @@ class MeshBody(LatticeSprings, SurfaceContact):
 
     def validate(self, key: str) -> None:
         validate_placement(self, key)
-        require(is_finite(self.spacing) and self.spacing > 0, f"{key}.spacing", self.spacing,
-                "must be > 0 m")
+        require(self.spacing == "auto" or (not isinstance(self.spacing, (str, bool))
+                                           and is_finite(self.spacing) and self.spacing > 0),
+                f"{key}.spacing", self.spacing, 'must be > 0 m, or "auto" (about `particles` '
+                                                "particles)")
+        low, high = PARTICLES
+        require(isinstance(self.particles, (int, np.integer)) and not isinstance(self.particles, bool)
+                and low <= self.particles <= high, f"{key}.particles", self.particles,
+                f"must be a whole number in [{low}, {high:,}]")
         require(np.shape(self.velocity) == (3,) and is_finite(self.velocity), f"{key}.velocity",
                 self.velocity, "must be three finite numbers (m/s)")
         require(is_finite(self.particle_mass) and self.particle_mass > 0,
                 f"{key}.particle_mass", self.particle_mass, "must be > 0 kg")
         self.validate_springs(key)
         self.validate_surface_contact(key)
-        mesh = self.mesh(f"{key}.file")
-        volume = check_closed(mesh, f"{key}.file", self.file)
-        check_memory(mesh, volume, self.spacing, f"{key}.spacing")
-        count = len(self.lattice(f"{key}.spacing")[0])
+        solid = self.solid(f"{key}.file")
+        require(has_inside(solid.vertices, solid.triangles), f"{key}.file", self.file,
+                'has no inside: it is a single open sheet, which is a cloth (type = "cloth")')
+        check_memory(solid, self.spacing, self.particles, key)
+        count = len(self.lattice(key).positions)
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
 
     def surface_spacing(self) -> float:
-        return self.spacing
+        return self.lattice().spacing
 
     def counts(self) -> tuple[int, int]:
         """Particles, and springs at most: each lattice point starts at most the cube's
         3 structural, 10 shear, 3 bend and 3 face springs (sizes.py)."""
-        particles = len(self.lattice()[0])
+        particles = len(self.lattice().positions)
         return particles, 19 * particles
 
-    def mesh(self, key: str = "file"):
-        return placed(read_mesh(self.file, key), self.scale, self.rotation_degrees,
-                      self.rotation_axis, self.position)
+    def mesh(self, key: str = "file") -> TriangleMesh:
+        """The file's own vertices (in its order, seam duplicates included), placed, and its
+        faces as triangles (polygons split into fans)."""
+        file = read_mesh_file(self.file, key)
+        return placed(TriangleMesh(file.vertices, file.triangles()), self.scale,
+                      self.rotation_degrees, self.rotation_axis, self.position)
 
-    def lattice(self, key: str = "spacing"):
-        """(positions (n, 3), index (lattice shape) of particle numbers or -1, embedding,
-        number of thin-part vertices), built once per file version and settings."""
-        self.mesh()   # a missing or unreadable file fails here, with its key
+    def solid(self, key: str = "file") -> TriangleMesh:
+        """The placed mesh with its vertices merged by position: the surface the body fills."""
+        mesh = self.mesh(key)
+        size = float(np.max(np.ptp(mesh.vertices, axis=0)))
+        require(size > 0, key, self.file, "has no extent: all its vertices coincide")
+        welded = weld(mesh.vertices)
+        return TriangleMesh(welded.vertices, welded.of_file_vertex[mesh.triangles])
+
+    def lattice(self, key: str = "bodies.0") -> Lattice:
+        """The particles and the embedded surface (module doc), built once per file version and
+        settings (``validate`` has checked them); ``key`` names the body in errors."""
+        self.mesh(f"{key}.file")   # a missing or unreadable file fails here, with its key
         path = Path(self.file).expanduser()
+        spacing = self.spacing if self.spacing == "auto" else float(self.spacing)
         return _cached_lattice(str(path.resolve()), path.stat().st_mtime_ns, float(self.scale),
                                float(self.rotation_degrees), tuple(map(float, self.rotation_axis)),
-                               tuple(map(float, self.position)), float(self.spacing), key)
+                               tuple(map(float, self.position)), spacing, int(self.particles))
 
     def build(self) -> BuiltBody:
-        positions, index, embedding, thin = self.lattice()
-        if thin:
-            warnings.warn(f"{self.file}: {thin} of {len(embedding.weights)} vertices lie in parts "
-                          f"thinner than the lattice (spacing {self.spacing:g} m) and ride the "
-                          "nearest full cell; a smaller spacing fills those parts",
-                          ThinPartsWarning, stacklevel=2)
-        springs, kinds = lattice_pattern(index, self)
-        count = len(positions)
-        vertices = self.mesh().vertices
+        lattice = self.lattice()
+        if lattice.unusual:
+            warnings.warn(f"{self.file}: {lattice.unusual}; filled where the generalized winding "
+                          "number says inside", MeshWarning, stacklevel=2)
+        springs, kinds = lattice_pattern(lattice.index, self)
+        count = len(lattice.positions)
         pinned = np.zeros(count, bool)
         pinned[list(self.pinned)] = True
         return BuiltBody(
-            positions=positions.copy(),
+            positions=lattice.positions.copy(),
             velocities=np.tile(np.asarray(self.velocity, float), (count, 1)),
             masses=np.full(count, float(self.particle_mass)),
             pinned=pinned, springs=springs, spring_kind=kinds,
             spring_parameters=spring_parameters(self),
-            surface=self.mesh().triangles.astype(np.int32), embedding=embedding,
-            terrain_offsets=surface_offsets(vertices, positions, embedding, self.spacing),
-            collision_surface=lattice_boundary(index))
+            surface=self.mesh().triangles.astype(np.int32), embedding=lattice.embedding,
+            terrain_offsets=np.zeros(count),
+            collision_surface=lattice_boundary(lattice.index))
 
-
-def lattice_counts(vertices: np.ndarray, spacing: float) -> np.ndarray:
-    """Lattice points along each axis of the mesh's box (the last one within the tolerance)."""
-    extent = vertices.max(axis=0) - vertices.min(axis=0)
-    return np.floor(extent / spacing + INSIDE_TOLERANCE).astype(np.int64) + 1
+    def summary(self) -> str:
+        """The lattice in words, for the run's summary."""
+        lattice = self.lattice()
+        how = (f"auto, for about {self.particles:,} particles" if self.spacing == "auto"
+               else "as set")
+        return f"spacing {lattice.spacing:.4g} m ({how}): {len(lattice.positions):,} particles"
 
 
 def available_memory() -> int:
@@ -149,71 +190,31 @@ def available_memory() -> int:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def check_memory(mesh, volume: float, spacing: float, key: str) -> None:
-    """Refuse a spacing whose lattice (estimated from the box and the volume, before building)
-    would not fit in half the memory available."""
-    box_points = float(np.prod(lattice_counts(mesh.vertices, spacing).astype(float)))
-    particles = volume / spacing ** 3
-    need = box_points * BYTES_PER_LATTICE_POINT + particles * BYTES_PER_PARTICLE
+def check_memory(solid: TriangleMesh, spacing, particles: int, key: str) -> None:
+    """Refuse a lattice that would not fit in half the memory available, estimated before
+    building it: the box's lattice points while filling, and the particles (the enclosed volume
+    over a cell, plus a layer of cells over the surface; at most the box's points)."""
     allowed = available_memory() / 2
+    if spacing == "auto":   # the box is filled at about `particles` points a try
+        need = particles * (BYTES_PER_LATTICE_POINT + BYTES_PER_PARTICLE)
+        require(need <= allowed, f"{key}.particles", particles,
+                f"needs about {need / 2**30:.1f} GiB, more than half the "
+                f"{2 * allowed / 2**30:.1f} GiB this machine has free; try "
+                f"<= {int(allowed / (BYTES_PER_LATTICE_POINT + BYTES_PER_PARTICLE)):,}")
+        return
+    points = box_points(solid.vertices, spacing)
+    a, b, c = (solid.vertices[solid.triangles[:, k]] for k in range(3))
+    volume = abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum())) / 6
+    area = 0.5 * float(np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    count = min(points, volume / spacing ** 3 + 2 * area / spacing ** 2)
+    need = points * BYTES_PER_LATTICE_POINT + count * BYTES_PER_PARTICLE
     if need > allowed:
         larger = spacing * (need / allowed) ** (1 / 3)
-        raise SceneError(key, spacing,
-                         f"gives about {particles:,.0f} particles ({box_points:,.0f} lattice "
-                         f"points to test), about {need / 2**30:.1f} GiB, more than half the "
+        raise SceneError(f"{key}.spacing", spacing,
+                         f"gives about {count:,.0f} particles ({points:,.0f} lattice points to "
+                         f"fill), about {need / 2**30:.1f} GiB, more than half the "
                          f"{2 * allowed / 2**30:.1f} GiB this machine has free; try "
-                         f">= {larger:.3g}")
-
-
-@functools.lru_cache(maxsize=8)
-def _cached_lattice(path, mtime_ns, scale, rotation_degrees, rotation_axis, position, spacing,
-                    key):
-    mesh = placed(read_mesh(path, "file"), scale, rotation_degrees, rotation_axis, position)
-    return build_lattice(mesh, spacing, key)
-
-
-def build_lattice(mesh, spacing: float, key: str):
-    """The particles inside ``mesh`` and its embedded surface (module doc)."""
-    import igl
-
-    low = mesh.vertices.min(axis=0)
-    counts = lattice_counts(mesh.vertices, spacing)
-    sites = np.indices(counts).reshape(3, -1).T
-    points = low + sites * spacing
-    distance = igl.signed_distance(points, mesh.vertices, mesh.triangles,
-                                   sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
-    inside = distance <= INSIDE_TOLERANCE * spacing
-    suggestion = f"try <= {float(np.min(mesh.vertices.max(axis=0) - low)) / 4:.3g}"
-    require(inside.any(), key, spacing, f"is too large for the mesh: no lattice point lies "
-                                        f"inside it; {suggestion}")
-    index = np.full(len(points), -1, np.int64)
-    index[inside] = np.arange(np.count_nonzero(inside))
-    index = index.reshape(counts)
-    full = full_cells(index)
-    require(len(full) > 0, key, spacing, "is too large for the mesh: no lattice cell lies "
-                                         f"wholly inside it, to carry its surface; {suggestion}")
-    embedding, thin = embed(mesh.vertices, low, spacing, index, full)
-    return points[inside], index, embedding, thin
-
-
-def surface_offsets(vertices, positions, embedding: Embedding, spacing: float) -> np.ndarray:
-    """(n,) m: for each particle, the distance to the farthest vertex whose nearest cell corner
-    it is (module doc); distances below round-off are zero."""
-    corner = embedding.particles[np.arange(len(vertices)), np.argmax(embedding.weights, axis=1)]
-    distance = np.linalg.norm(vertices - positions[corner], axis=1)
-    offsets = np.zeros(len(positions))
-    np.maximum.at(offsets, corner, distance)
-    offsets[offsets < 1e-9 * spacing] = 0.0
-    return offsets
-
-
-def full_cells(index: np.ndarray) -> np.ndarray:
-    """(C, 3) lattice coordinates of the cells whose eight corners are all particles."""
-    kept = index >= 0
-    full = np.ones(tuple(n - 1 for n in index.shape), bool)
-    for a, b, c in np.ndindex(2, 2, 2):
-        full &= kept[a:a + full.shape[0], b:b + full.shape[1], c:c + full.shape[2]]
-    return np.argwhere(full)
+                         f'>= {larger:.3g}, or "auto"')
 
 
 def lattice_boundary(index: np.ndarray) -> np.ndarray:
@@ -247,26 +248,64 @@ def lattice_boundary(index: np.ndarray) -> np.ndarray:
     return np.concatenate(triangles).astype(np.int32)
 
 
-def embed(vertices, low, spacing: float, index, full) -> tuple[Embedding, int]:
-    """Each vertex's full cell and its trilinear weights there (module doc), and how many
-    vertices lie farther than one spacing from every full cell."""
-    from scipy.spatial import cKDTree
+@functools.lru_cache(maxsize=8)
+def _cached_lattice(path, mtime_ns, scale, rotation_degrees, rotation_axis, position, spacing,
+                    particles):
+    body = MeshBody(file=path, scale=scale, rotation_degrees=rotation_degrees,
+                    rotation_axis=rotation_axis, position=position)
+    return build_lattice(body.mesh(), body.solid(), spacing, particles)
 
-    local = (vertices - low) / spacing
-    cell = np.clip(np.floor(local).astype(np.int64), 0, np.array(index.shape) - 2)
-    is_full = np.zeros(tuple(n - 1 for n in index.shape), bool)
-    is_full[tuple(full.T)] = True
-    elsewhere = ~is_full[tuple(cell.T)]
-    thin = 0
-    if elsewhere.any():
-        distance, nearest = cKDTree(full + 0.5).query(local[elsewhere])
-        cell[elsewhere] = full[nearest]
-        # a vertex at the centre's distance d from a cell's centre is d - sqrt(3)/2 from it at most
-        thin = int(np.count_nonzero(distance - np.sqrt(3) / 2 > 1.0))
-    f = local - cell
+
+def build_lattice(mesh: TriangleMesh, solid: TriangleMesh, spacing, particles: int) -> Lattice:
+    """The particles carrying ``solid`` (the welded surface) and the embedding of ``mesh`` (the
+    file's vertices) in them (module doc)."""
+    if spacing == "auto":
+        spacing, filled = auto_spacing(solid, particles)
+    else:
+        filled = fill(solid.vertices, solid.triangles, float(spacing))
+    embedding = embed(mesh.vertices, filled)
+    return Lattice(filled.positions, filled.index, embedding, float(spacing),
+                   unusual(solid.vertices, solid.triangles).description())
+
+
+def auto_spacing(solid: TriangleMesh, particles: int):
+    """(spacing, filled lattice): the spacing, to three significant digits, whose lattice has
+    closest to ``particles`` particles among a few tries (AUTO_TRIES, stopping within
+    AUTO_TOLERANCE). The count goes as the volume over s^3 plus the surface over s^2: each try
+    follows the slope of log count over log spacing measured between the last two."""
+    extent = np.ptp(solid.vertices, axis=0)
+    extent = np.maximum(extent, 1e-3 * extent.max())       # a flat mesh still has a box
+    spacing = float(np.prod(extent) / particles) ** (1 / 3)
+    tried = {}
+    slope = -2.5
+    for _ in range(AUTO_TRIES):
+        spacing = float(f"{spacing:.3g}")
+        if spacing in tried:
+            break
+        filled = fill(solid.vertices, solid.triangles, spacing)
+        tried[spacing] = filled
+        count = len(filled.positions)
+        if abs(count / particles - 1) <= AUTO_TOLERANCE:
+            break
+        if len(tried) >= 2:
+            (s0, f0), (s1, f1) = list(tried.items())[-2:]
+            if s0 != s1 and len(f0.positions) != len(f1.positions):
+                measured = (math.log(len(f1.positions) / len(f0.positions))
+                            / math.log(s1 / s0))
+                slope = min(max(measured, -3.5), -1.5)
+        spacing *= (particles / count) ** (1 / slope)
+    best = min(tried, key=lambda s: (abs(math.log(len(tried[s].positions) / particles)), s))
+    return best, tried[best]
+
+
+def embed(vertices: np.ndarray, filled) -> Embedding:
+    """Each vertex's kept cell and its trilinear weights there (module doc)."""
+    grid = filled.grid
+    cell, _ = locate(vertices, filled.kept, grid)   # found for every vertex (fill)
+    f = (vertices - grid.origin) / grid.spacing - cell
     particles, weights = [], []
     for corner in np.ndindex(2, 2, 2):
         site = cell + corner
-        particles.append(index[tuple(site.T)])
+        particles.append(filled.index[tuple(site.T)])
         weights.append(np.prod(np.where(corner, f, 1.0 - f), axis=1))
-    return Embedding(np.stack(particles, axis=1), np.stack(weights, axis=1)), thin
+    return Embedding(np.stack(particles, axis=1), np.stack(weights, axis=1))

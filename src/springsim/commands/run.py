@@ -108,7 +108,9 @@ def run(args) -> int:
         plot_energy(recording, args.plot)
         written.append(args.plot)
     if not args.quiet:
-        print("\n".join(summary_lines(recording)), flush=True)
+        chosen = [(f"bodies.{i} lattice", body.summary())
+                  for i, body in enumerate(scene.bodies) if hasattr(body, "summary")]
+        print("\n".join(summary_lines(recording, chosen)), flush=True)
     if args.video:
         problem = write_video_of(simulation, recording, args.video)
         if problem:
