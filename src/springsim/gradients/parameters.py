@@ -71,7 +71,7 @@ class SceneValue:
         from ..scenefile import set_path
 
         value = np.asarray(value, float).reshape(self.shape)
-        plain = float(value) if value.ndim == 0 else tuple(float(c) for c in value)
+        plain = float(value) if value.ndim == 0 else [float(c) for c in value]
         return set_path(scene, self.key.split("."), plain, "", self.key)
 
     def tangents(self, scene, model):
