@@ -142,19 +142,19 @@ class ModelArray:
     NAMES = ("initial_positions", "initial_velocities", "masses", "rest_lengths", "spring_ks",
              "spring_kd")
 
-    def __init__(self, name, body=None):
-        self.name, self.body = name, body
+    def __init__(self, name, kind, body=None):
+        self.name, self.kind, self.body = name, kind, body
 
     @classmethod
     def named(cls, scene, name):
         parts = name.split(".")
         if name in cls.NAMES:
-            return cls(name)
+            return cls(name, name)
         if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "stiffness_field":
             if not (parts[1].isdigit() and int(parts[1]) < len(scene.bodies)):
                 raise SceneError("wrt", name, f"names no body: the scene has bodies 0 to "
                                  f"{len(scene.bodies) - 1}")
-            return cls("stiffness_field", int(parts[1]))
+            return cls(name, "stiffness_field", int(parts[1]))
         return None
 
     stage = "model"
@@ -166,17 +166,17 @@ class ModelArray:
 
     def read(self, model):
         arrays = model.arrays
-        if self.name == "initial_positions":
+        if self.kind == "initial_positions":
             return model.initial_positions.copy()
-        if self.name == "initial_velocities":
+        if self.kind == "initial_velocities":
             return model.initial_velocities.copy()
-        if self.name == "masses":
+        if self.kind == "masses":
             return model.mass.copy()
-        if self.name == "rest_lengths":
+        if self.kind == "rest_lengths":
             return arrays.rest_length.copy()
-        if self.name == "spring_ks":
+        if self.kind == "spring_ks":
             return arrays.group_ks[arrays.spring_group].astype(float)
-        if self.name == "spring_kd":
+        if self.kind == "spring_kd":
             return arrays.group_kd[arrays.spring_group].astype(float)
         return np.ones(int(self.body_springs(model).sum()))   # stiffness_field: the scene's
 
@@ -188,20 +188,23 @@ class ModelArray:
         if value.shape != current.shape:
             raise SceneError(self.name, f"an array of shape {value.shape}",
                              f"must have shape {current.shape}")
-        if self.name in ("initial_positions", "initial_velocities"):
-            return dataclasses.replace(model, **{self.name: value.copy()})
-        if self.name == "masses":
+        if self.kind == "initial_positions":
+            return dataclasses.replace(model, initial_positions=value.copy())
+        if self.kind == "initial_velocities":   # a pinned particle stays at rest (build_model)
+            return dataclasses.replace(model, initial_velocities=np.where(
+                model.pinned[:, None], 0.0, value))
+        if self.kind == "masses":
             return dataclasses.replace(model, mass=value.copy(), arrays=arrays._replace(
                 inv_mass=np.where(model.pinned, 0.0, 1.0 / value)))
-        if self.name == "rest_lengths":
+        if self.kind == "rest_lengths":
             return dataclasses.replace(model, arrays=arrays._replace(
                 rest_length=value.copy(),
                 **build_spring_runs(arrays.springs, arrays.spring_group, value)))
         ks = arrays.group_ks[arrays.spring_group].astype(float)
         kd = arrays.group_kd[arrays.spring_group].astype(float)
-        if self.name == "spring_ks":
+        if self.kind == "spring_ks":
             ks = value
-        elif self.name == "spring_kd":
+        elif self.kind == "spring_kd":
             kd = value
         else:
             ks = ks.copy()
@@ -210,17 +213,17 @@ class ModelArray:
 
     def gradient(self, scene, model, result):
         bar = result.bar
-        if self.name == "initial_positions":
+        if self.kind == "initial_positions":
             return result.x0_bar.copy()
-        if self.name == "initial_velocities":
+        if self.kind == "initial_velocities":
             return result.v0_bar.copy()
-        if self.name == "masses":
+        if self.kind == "masses":
             return bar.mass.copy()
-        if self.name == "rest_lengths":
+        if self.kind == "rest_lengths":
             return bar.rest.copy()
-        if self.name == "spring_ks":
+        if self.kind == "spring_ks":
             return bar.ks.copy()
-        if self.name == "spring_kd":
+        if self.kind == "spring_kd":
             return bar.kd.copy()
         members = self.body_springs(model)
         ks = model.arrays.group_ks[model.arrays.spring_group].astype(float)
