@@ -76,7 +76,7 @@ def prepare(scene, wrt, values=None, integrator=None, dt=None, duration=None, th
 def run_gradient(simulation, loss, duration: float, memory_limit=DEFAULT_MEMORY_LIMIT) -> Result:
     """Forward run, loss, backward pass (tape.py) for a prepared simulation."""
     dt = simulation.dt
-    steps = int(round(duration / dt))
+    steps = round(duration / dt)
     require(steps >= 1, "duration", duration, f"must be at least one step of dt = {dt:g} s")
     frame_steps = loss.frame_steps(duration, dt, simulation.model.particle_count)
     frames, tape = record(simulation, steps, frame_steps, memory_limit)
@@ -111,4 +111,4 @@ def gradient(scene, loss, wrt, duration=None, integrator=None, dt=None, fps=None
     return result.loss, {p.name: p.gradient(scene, simulation.model, result) for p in params}
 
 
-__all__ = ["gradient", "Result", "prepare", "run_gradient"]
+__all__ = ["Result", "gradient", "prepare", "run_gradient"]

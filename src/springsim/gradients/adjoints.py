@@ -11,7 +11,7 @@ start. Contact is not in these steps: the caller refuses scenes with any (gradie
 import numpy as np
 
 from .physics import accelerations, accelerations_vjp
-from .solve import system_vjp_iteration, newton_estimates
+from .solve import newton_estimates, system_vjp_iteration
 
 ADJOINTS: dict[str, type] = {}
 

@@ -9,11 +9,18 @@ linearized step, treating the forward solve as exact (its CG residual is the gra
 of the tolerance's order).
 """
 import numpy as np
-import scipy.sparse as sparse
-import scipy.sparse.linalg as linalg
+from scipy import sparse
+from scipy.sparse import linalg
 
-from .physics import (geometry, spring_forces, spring_forces_vjp, stiffness_coefficients,
-                      stiffness_product, stiffness_product_vjp, system_product_vjp)
+from .physics import (
+    geometry,
+    spring_forces,
+    spring_forces_vjp,
+    stiffness_coefficients,
+    stiffness_product,
+    stiffness_product_vjp,
+    system_product_vjp,
+)
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
 DIRECT_LIMIT = 6000         # unknowns up to which a sparse LU solves (exact, and quick there)
