@@ -122,7 +122,7 @@ def test_newton_iterations_and_determinism():
 def test_checkpoints_give_the_same_gradient():
     scene = small_scene()
     names = ["bodies.0.structural.ks", "initial_velocities"]
-    _, simulation, params = prepare(scene, names, integrator="rk4", dt=0.002)
+    _, simulation, _ = prepare(scene, names, integrator="rk4", dt=0.002)
     loss = as_loss(weighted_squares, 100)
     kept = run_gradient(simulation, loss, 0.04)
     _, simulation, _params = prepare(scene, names, integrator="rk4", dt=0.002)

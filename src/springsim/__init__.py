@@ -15,6 +15,7 @@ from .scene import Scene
 from .scenefile import load_scene
 from .simulation import Simulation
 from .sweeps import sweep
+from .gradients import gradient
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
@@ -22,4 +23,4 @@ except PackageNotFoundError:              # a source tree on sys.path with no in
     __version__ = "0+unknown"
 
 __all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
-           "integrator_names", "preset_names", "sweep"]
+           "integrator_names", "preset_names", "sweep", "gradient"]

@@ -18,10 +18,18 @@ def check_supported(simulation) -> None:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
                          + ", ".join(ADJOINTS))
     arrays = simulation.model.arrays
-    if arrays.balls.shape[0] or arrays.surface_triangles.shape[0]:
-        raise SceneError("bodies", f"{len(simulation.model.bodies)} bodies",
-                         "have balls or body-body contact, which gradients do not follow yet: "
-                         "a scene of bodies that cannot touch each other")
+    if arrays.balls.shape[0]:
+        raise SceneError("bodies", "balls", "touch by ball contact, which gradients do not "
+                         "follow yet")
+    for body, self_colliding in enumerate(arrays.body_self_collision):
+        if self_colliding:
+            raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
+                             "self contact yet: set it to false")
+    surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
+        arrays.surface_points) else []
+    if len(surfaces) > 1:
+        raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
+                         "other, and gradients do not follow body-body contact yet")
 
 
 def contact_check(simulation):
