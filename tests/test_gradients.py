@@ -156,3 +156,30 @@ def test_nan_loss_and_untouched_terrain():
     scene.terrains = [Plane(point=(0.0, 1.48, 0.0))]  # reached within 0.1 s of falling
     with pytest.raises(SceneError, match="terrain contact"):
         gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4", dt=0.002)
+
+
+def test_fit_command_recovers_stiffness(tmp_path, capsys):
+    """`springsim fit` on a take of the small cube with soft structural springs (ks = 200, so
+    that 0.3 s of swinging depends on them), started at 400."""
+    import json
+
+    from springsim.cli import main
+    from springsim.scenefile import scene_to_toml
+
+    scene_file = tmp_path / "cube.toml"
+    scene = small_scene()
+    scene.bodies[0].structural = type(scene.bodies[0].structural)(200.0, 60.0)
+    scene_file.write_text(scene_to_toml(scene))
+    options = ["--integrator", "rk4", "--dt", "0.002"]
+    take = tmp_path / "take.npz"
+    assert main(["run", str(scene_file), *options, "--duration", "0.3", "--fps", "100",
+                 "--out", str(take), "--quiet"]) == 0
+    out = tmp_path / "fitted.toml"
+    assert main(["fit", str(scene_file), *options, "--observed", str(take), "--fit",
+                 "bodies.0.structural.ks", "--set", "bodies.0.structural.ks=400",
+                 "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0].startswith("iteration 1: loss")
+    answer = json.loads(lines[-1])
+    assert answer["fitted"]["bodies.0.structural.ks"] == pytest.approx(200.0, rel=1e-2)
+    assert "ks = " in out.read_text()

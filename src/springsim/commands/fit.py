@@ -98,6 +98,7 @@ def plot_fit(result, loss, path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from ..plots import plot_format
     from ..safe_files import atomic_output
 

@@ -68,7 +68,7 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
             bounds.append((np.log(value) - np.log(BOUND_FACTOR), np.log(value)
                            + np.log(BOUND_FACTOR)) if is_positive(p.name) else (None, None))
     evaluations = [0]
-    last = {}
+    last, scale = {}, {}
 
     def objective(z):
         values = unpack(z)
@@ -81,7 +81,10 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
             g = np.ravel(p.gradient(fitted_scene, simulation.model, result))
             grads.append(g * np.ravel(values[p.name]) if is_positive(p.name) else g)
         last.update(loss=result.loss, values=values, frames=result.frames)
-        return result.loss, np.concatenate(grads)
+        # L-BFGS-B's tolerance is relative to max(|loss|, 1): a loss in m^2 (1e-6 for
+        # millimetres) would stop it at once, so it sees the loss over the starting loss
+        scale.setdefault("start", result.loss if result.loss > 0 else 1.0)
+        return result.loss / scale["start"], np.concatenate(grads) / scale["start"]
 
     history = []
 
@@ -99,6 +102,6 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
     for p in params:
         if p.stage == "scene":
             fitted_scene = p.apply(fitted_scene, values[p.name])
-    return FitResult(values, float(answer.fun), int(answer.nit), evaluations[0],
+    return FitResult(values, float(answer.fun) * scale["start"], int(answer.nit), evaluations[0],
                      bool(answer.success), str(answer.message), history, fitted_scene,
                      last.get("frames"))
