@@ -6,21 +6,32 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
-from importlib.metadata import PackageNotFoundError, version as _version
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
 
 from .errors import SceneError, SimulationDiverged
+from .gradients import gradient
 from .integrators import integrator_names
 from .presets import preset_names
 from .scene import Scene
 from .scenefile import load_scene
 from .simulation import Simulation
 from .sweeps import sweep
-from .gradients import gradient
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
 except PackageNotFoundError:              # a source tree on sys.path with no install
     __version__ = "0+unknown"
 
-__all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
-           "integrator_names", "preset_names", "sweep", "gradient"]
+__all__ = [
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "SimulationDiverged",
+    "__version__",
+    "gradient",
+    "integrator_names",
+    "load_scene",
+    "preset_names",
+    "sweep",
+]
