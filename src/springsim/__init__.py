@@ -6,9 +6,11 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
-from importlib.metadata import PackageNotFoundError, version as _version
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
 
 from .errors import SceneError, SimulationDiverged
+from .gradients import gradient
 from .integrators import integrator_names
 from .presets import preset_names
 from .scene import Scene
@@ -21,5 +23,15 @@ try:
 except PackageNotFoundError:              # a source tree on sys.path with no install
     __version__ = "0+unknown"
 
-__all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
-           "integrator_names", "preset_names", "sweep"]
+__all__ = [
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "SimulationDiverged",
+    "__version__",
+    "gradient",
+    "integrator_names",
+    "load_scene",
+    "preset_names",
+    "sweep",
+]

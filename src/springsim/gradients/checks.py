@@ -1,0 +1,65 @@
+"""What the adjoint covers, checked before the work (``check_supported``) and after the forward
+run (``check_contact_free``), each a one-line SceneError.
+
+Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
+dampers, gravity, drag and pins. Not yet covered: terrain contact, body-body and ball contact.
+A scene may have terrains as long as no particle comes within a terrain's contact band during
+the run; one that does is refused rather than given a gradient that leaves contact out.
+"""
+import numpy as np
+
+from ..errors import SceneError
+from .adjoints import ADJOINTS
+
+
+def check_supported(simulation) -> None:
+    name = simulation.integrator.name
+    if name not in ADJOINTS:
+        raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
+                         + ", ".join(ADJOINTS))
+    arrays = simulation.model.arrays
+    if arrays.balls.shape[0]:
+        raise SceneError("bodies", "balls", "touch by ball contact, which gradients do not "
+                         "follow yet")
+    for body, self_colliding in enumerate(arrays.body_self_collision):
+        if self_colliding:
+            raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
+                             "self contact yet: set it to false")
+    surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
+        arrays.surface_points) else []
+    if len(surfaces) > 1:
+        raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
+                         "other, and gradients do not follow body-body contact yet")
+
+
+def contact_check(simulation):
+    """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
+    a terrain's contact band (or would be within the step, as implicit_euler's constraints look
+    ahead); None without terrains. The backward pass calls it on every step's start."""
+    model = simulation.model
+    if not model.terrains:
+        return None
+    radii = model.arrays.terrain_offset
+    h = simulation.dt
+
+    def check(step, state):
+        x, v = state
+        for t, terrain in enumerate(model.terrains):
+            phi = terrain.signed_distance(x, radii)
+            reach = phi + h * np.minimum(_normal_speed(terrain, x, v, radii), 0.0)
+            touching = (np.minimum(phi, reach) < model.arrays.terrain_epsilon[t]) & ~model.pinned
+            if touching.any():
+                raise SceneError(f"terrains.{t}", type(terrain).__name__,
+                                 f"is touched at step {step} (particle "
+                                 f"{int(np.argmax(touching))}): gradients through terrain "
+                                 "contact are not supported yet")
+    return check
+
+
+def _normal_speed(terrain, x, v, radii):
+    """v . n, n the terrain's normal by differences of its distance (any terrain kind)."""
+    step = 1e-6
+    normal = np.stack([(terrain.signed_distance(x + step * e, radii)
+                        - terrain.signed_distance(x - step * e, radii)) / (2 * step)
+                       for e in np.eye(3)], axis=1)
+    return np.einsum("ij,ij->i", v, normal)

@@ -1,0 +1,246 @@
+"""What a gradient can be taken with respect to: named parameters, each of which knows its value,
+how to set it, and its gradient from the adjoint's per-spring and per-particle cotangents.
+
+Two kinds, an open set (``parameter`` tries each kind in PARAMETER_KINDS):
+
+- ``SceneValue``: any number (or vector of numbers) of the scene, by its dotted key as ``--set``
+  writes it: ``bodies.0.structural.ks``, ``gravity``, ``drag``, ``bodies.0.particle_mass``,
+  ``bodies.0.velocity``, ``bodies.0.edge_length``. How the model depends on it is found by
+  building the model at value +- delta (model.build_model): the springs' ks, kd and rest
+  lengths, the masses, drag, gravity and the initial state are linear in every such key, so the
+  difference is exact to rounding. A key that changes anything else of the model (a terrain, the
+  lattice) is refused as not differentiable.
+- ``ModelArray``: one of the model's own arrays, set on the built model: ``initial_positions``,
+  ``initial_velocities`` (P, 3), ``masses`` (P,), ``rest_lengths``, ``spring_ks``, ``spring_kd``
+  (S,), and ``bodies.N.stiffness_field``, a scale on each spring of body N (1: the scene's ks).
+  Setting rest lengths does not move the initial positions, and setting initial positions does
+  not change rest lengths (the model's, built from the scene's positions, stay).
+"""
+import dataclasses
+
+import numpy as np
+
+from ..errors import SceneError
+from ..model import build_model
+from ..spring_runs import build_spring_runs
+from .physics import Physical
+
+# the model arrays that the adjoint covers (Physical) and that a SceneValue may change
+COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
+           "spring_runs", "run_rest_length", "loose_springs"}
+MAX_GROUPS = 32767   # spring_group is int16
+
+
+def parameter(scene, name):
+    """The parameter ``name`` names in ``scene``; one clear error if none does."""
+    if not isinstance(name, str):
+        raise SceneError("wrt", name, "must be a parameter name (a string)")
+    for kind in PARAMETER_KINDS:
+        found = kind.named(scene, name)
+        if found is not None:
+            return found
+    raise SceneError("wrt", name, "names no parameter: give a numeric scene key "
+                     "(bodies.0.structural.ks, gravity, drag, ...) or one of "
+                     + ", ".join(ModelArray.NAMES) + ", bodies.N.stiffness_field")
+
+
+class SceneValue:
+    stage = "scene"
+
+    def __init__(self, key, value):
+        self.key, self.name = key, key
+        self.shape = np.shape(value)
+        self.value = np.asarray(value, float)
+
+    @classmethod
+    def named(cls, scene, name):
+        try:
+            value = get_path(scene, name.split("."))
+        except (AttributeError, IndexError, ValueError, TypeError):
+            return None
+        if isinstance(value, bool) or not (isinstance(value, float) or (
+                isinstance(value, (tuple, list)) and value
+                and all(isinstance(c, float) for c in value))):
+            if isinstance(value, (int, bool, str)) or value is None:
+                raise SceneError("wrt", name, f"is {value!r}, not a real number: it cannot be "
+                                 "differentiated")
+            return None
+        return cls(name, value)
+
+    def apply(self, scene, value):
+        from ..scenefile import set_path
+
+        value = np.asarray(value, float).reshape(self.shape)
+        plain = float(value) if value.ndim == 0 else [float(c) for c in value]
+        return set_path(scene, self.key.split("."), plain, "", self.key)
+
+    def tangents(self, scene, model):
+        """[(Physical difference, x0 difference, v0 difference) per component], d/d value."""
+        base = self.value.ravel()
+        out = []
+        for j in range(base.size):
+            delta = 1e-4 * max(abs(base[j]), 1e-3)
+            built, taken = [], []
+            for sign in (1.0, -1.0):
+                value = base.copy()
+                value[j] += sign * delta
+                taken.append(value[j])
+                try:
+                    changed = build_model(self.apply(scene, value))
+                except SceneError as error:
+                    raise SceneError("wrt", self.key, "cannot be differentiated at "
+                                     f"{self.value.tolist()}: {error}") from None
+                check_covered(self.key, model, changed)
+                built.append(changed)
+            span = taken[0] - taken[1]   # the step the values took, rounding included
+            plus, minus = Physical.of(built[0]), Physical.of(built[1])
+            out.append(((plus.ks - minus.ks) / span, (plus.kd - minus.kd) / span,
+                        (plus.rest - minus.rest) / span, (plus.mass - minus.mass) / span,
+                        (plus.drag - minus.drag) / span, (plus.gravity - minus.gravity) / span,
+                        (built[0].initial_positions - built[1].initial_positions) / span,
+                        (built[0].initial_velocities - built[1].initial_velocities) / span))
+        return out
+
+    def gradient(self, scene, model, result):
+        bars = (result.bar.ks, result.bar.kd, result.bar.rest, result.bar.mass, result.bar.drag,
+                result.bar.gravity, result.x0_bar, result.v0_bar)
+        grad = [sum(float(np.sum(b * t)) for b, t in zip(bars, tangent))
+                for tangent in self.tangents(scene, model)]
+        return float(grad[0]) if self.shape == () else np.array(grad).reshape(self.shape)
+
+
+def check_covered(key, model, changed):
+    """Refuse a key that changes a model array the adjoint does not cover."""
+    for field in model.arrays._fields:
+        if field in COVERED:
+            continue
+        old, new = getattr(model.arrays, field), getattr(changed.arrays, field)
+        if np.shape(old) != np.shape(new) or not np.array_equal(old, new):
+            raise SceneError("wrt", key, f"is not differentiable: it changes the model's "
+                             f"{field}, which the gradient does not follow")
+    if not np.array_equal(model.arrays.springs, changed.arrays.springs) or \
+            not np.array_equal(model.pinned, changed.pinned):
+        raise SceneError("wrt", key, "is not differentiable: it changes the springs or pins")
+
+
+def get_path(node, parts):
+    for part in parts:
+        if isinstance(node, (list, tuple)):
+            node = node[int(part)]
+        elif dataclasses.is_dataclass(node):
+            if part not in {f.name for f in dataclasses.fields(node)}:
+                raise AttributeError(part)
+            node = getattr(node, part)
+        else:
+            raise TypeError(part)
+    return node
+
+
+class ModelArray:
+    """One of the model's own arrays (module doc); ``apply`` returns (model, state changes)."""
+
+    NAMES = ("initial_positions", "initial_velocities", "masses", "rest_lengths", "spring_ks",
+             "spring_kd")
+
+    def __init__(self, name, kind, body=None):
+        self.name, self.kind, self.body = name, kind, body
+
+    @classmethod
+    def named(cls, scene, name):
+        parts = name.split(".")
+        if name in cls.NAMES:
+            return cls(name, name)
+        if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "stiffness_field":
+            if not (parts[1].isdigit() and int(parts[1]) < len(scene.bodies)):
+                raise SceneError("wrt", name, f"names no body: the scene has bodies 0 to "
+                                 f"{len(scene.bodies) - 1}")
+            return cls(name, "stiffness_field", int(parts[1]))
+        return None
+
+    stage = "model"
+
+    def body_springs(self, model):
+        body = model.bodies[self.body]
+        first = model.arrays.springs[:, 0].astype(np.int64)
+        return (first >= body.start) & (first < body.stop)
+
+    def read(self, model):
+        arrays = model.arrays
+        if self.kind == "initial_positions":
+            return model.initial_positions.copy()
+        if self.kind == "initial_velocities":
+            return model.initial_velocities.copy()
+        if self.kind == "masses":
+            return model.mass.copy()
+        if self.kind == "rest_lengths":
+            return arrays.rest_length.copy()
+        if self.kind == "spring_ks":
+            return arrays.group_ks[arrays.spring_group].astype(float)
+        if self.kind == "spring_kd":
+            return arrays.group_kd[arrays.spring_group].astype(float)
+        return np.ones(int(self.body_springs(model).sum()))   # stiffness_field: the scene's
+
+    def apply(self, model, value):
+        """The model with this array set to ``value`` (the initial state is the model's)."""
+        value = np.asarray(value, float)
+        arrays = model.arrays
+        current = self.read(model)
+        if value.shape != current.shape:
+            raise SceneError(self.name, f"an array of shape {value.shape}",
+                             f"must have shape {current.shape}")
+        if self.kind == "initial_positions":
+            return dataclasses.replace(model, initial_positions=value.copy())
+        if self.kind == "initial_velocities":   # a pinned particle stays at rest (build_model)
+            return dataclasses.replace(model, initial_velocities=np.where(
+                model.pinned[:, None], 0.0, value))
+        if self.kind == "masses":
+            return dataclasses.replace(model, mass=value.copy(), arrays=arrays._replace(
+                inv_mass=np.where(model.pinned, 0.0, 1.0 / value)))
+        if self.kind == "rest_lengths":
+            return dataclasses.replace(model, arrays=arrays._replace(
+                rest_length=value.copy(),
+                **build_spring_runs(arrays.springs, arrays.spring_group, value)))
+        ks = arrays.group_ks[arrays.spring_group].astype(float)
+        kd = arrays.group_kd[arrays.spring_group].astype(float)
+        if self.kind == "spring_ks":
+            ks = value
+        elif self.kind == "spring_kd":
+            kd = value
+        else:
+            ks = ks.copy()
+            ks[self.body_springs(model)] *= value
+        return regrouped(model, ks, kd)
+
+    def gradient(self, scene, model, result):
+        bar = result.bar
+        if self.kind == "initial_positions":
+            return result.x0_bar.copy()
+        if self.kind == "initial_velocities":
+            return result.v0_bar.copy()
+        if self.kind == "masses":
+            return bar.mass.copy()
+        if self.kind == "rest_lengths":
+            return bar.rest.copy()
+        if self.kind == "spring_ks":
+            return bar.ks.copy()
+        if self.kind == "spring_kd":
+            return bar.kd.copy()
+        members = self.body_springs(model)
+        ks = model.arrays.group_ks[model.arrays.spring_group].astype(float)
+        return (bar.ks * ks)[members]
+
+
+def regrouped(model, ks, kd):
+    """The model with spring s given (ks[s], kd[s]): one parameter group per distinct pair."""
+    arrays = model.arrays
+    pairs, group = np.unique(np.stack([ks, kd], axis=1), axis=0, return_inverse=True)
+    if len(pairs) > MAX_GROUPS:
+        raise SceneError("spring stiffness", f"{len(pairs)} distinct (ks, kd) pairs",
+                         f"must be at most {MAX_GROUPS} (the model's parameter groups)")
+    group = group.ravel().astype(np.int16)
+    return dataclasses.replace(model, arrays=arrays._replace(
+        spring_group=group, group_ks=pairs[:, 0].copy(), group_kd=pairs[:, 1].copy(),
+        **build_spring_runs(arrays.springs, group, arrays.rest_length)))
+
+
+PARAMETER_KINDS = [ModelArray, SceneValue]

@@ -1,0 +1,233 @@
+"""The model's physics as differentiable NumPy: forces, the implicit system's products, and their
+vector-Jacobian products (VJPs).
+
+Everything here is the same arithmetic as the kernels (forces.py, implicit/jacobian.py), in the
+vectorized form of reference.py, with one parameter per spring (``Physical``): the gradient of
+a group's ks is the sum over its springs, of a body's mass the sum over its particles, and so
+on (parameters.py). For a spring (a, b) with d = x_a - x_b, L = |d|, l = d / L, w = v_a - v_b:
+
+    force on a      f = -ks (L - r) l - kd (w . l) l                       (forces.py)
+    stiffness       (dF_a/dx_a) u = -(along (l . u) l + across u),         (jacobian.py)
+                    across = ks max(0, 1 - r / L), along = ks - across
+    system block    C u = h kd (l . u) l + h^2 (along (l . u) l + across u)
+
+Each VJP takes a cotangent g on the particles' outputs and, per spring, g_s = g_a - g_b, then
+adds the cotangents of d (to x_a, minus to x_b), of w or u, and of ks, kd, r. A spring of zero
+length has no force and no Jacobian (the kernels' rule), so it passes no gradient: never NaN.
+"""
+from dataclasses import dataclass, fields
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Physical(NamedTuple):
+    """The differentiable numbers of a model, one per spring or particle."""
+
+    ks: np.ndarray        # (S,) N/m
+    kd: np.ndarray        # (S,) N s/m
+    rest: np.ndarray      # (S,) m
+    mass: np.ndarray      # (P,) kg (a pinned particle's is its body's, though nothing uses it)
+    drag: np.ndarray      # (P,) N s/m
+    gravity: np.ndarray   # (3,) m/s^2
+    free: np.ndarray      # (P,) bool: not pinned
+    a: np.ndarray         # (S,) the springs' first particles
+    b: np.ndarray         # (S,) and second
+
+    @classmethod
+    def of(cls, model) -> "Physical":
+        arrays = model.arrays
+        group = arrays.spring_group
+        return cls(arrays.group_ks[group].astype(float), arrays.group_kd[group].astype(float),
+                   arrays.rest_length.astype(float), model.mass.astype(float),
+                   arrays.drag.astype(float), arrays.gravity.astype(float),
+                   arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
+                   arrays.springs[:, 1].astype(np.int64))
+
+    @property
+    def inv_mass(self) -> np.ndarray:
+        return np.where(self.free, 1.0 / self.mass, 0.0)
+
+    @property
+    def solve_mass(self) -> np.ndarray:
+        """The implicit system's masses: a pinned particle's placeholder is 1 kg
+        (jacobian.particle_mass), and its rows are filtered out."""
+        return np.where(self.free, self.mass, 1.0)
+
+
+@dataclass
+class Cotangents:
+    """Gradients of the loss, accumulated as the adjoint runs backwards (Physical's shapes)."""
+
+    ks: np.ndarray
+    kd: np.ndarray
+    rest: np.ndarray
+    mass: np.ndarray
+    drag: np.ndarray
+    gravity: np.ndarray
+
+    @classmethod
+    def zeros(cls, physical: Physical) -> "Cotangents":
+        return cls(*(np.zeros_like(getattr(physical, f.name), dtype=float) for f in fields(cls)))
+
+
+class Springs(NamedTuple):
+    """Per-spring geometry at some positions: d, L, l (zero where L = 0) and 1 / L (or 0)."""
+
+    d: np.ndarray
+    length: np.ndarray
+    unit: np.ndarray
+    inverse: np.ndarray
+
+
+def geometry(physical: Physical, x: np.ndarray) -> Springs:
+    d = x[physical.a] - x[physical.b]
+    length = np.sqrt(np.einsum("ij,ij->i", d, d))
+    inverse = np.divide(1.0, length, out=np.zeros_like(length), where=length > 0.0)
+    return Springs(d, length, d * inverse[:, None], inverse)
+
+
+def per_spring(physical: Physical, g: np.ndarray) -> np.ndarray:
+    return g[physical.a] - g[physical.b]
+
+
+def scatter(physical: Physical, values: np.ndarray, out: np.ndarray) -> None:
+    """out_a += values, out_b -= values (per spring), deterministically (np.add.at is ordered)."""
+    np.add.at(out, physical.a, values)
+    np.add.at(out, physical.b, -values)
+
+
+def dot(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", u, w)
+
+
+def projection_vjp(springs: Springs, w: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """The cotangent of d for P(d) = (l . w) l, w fixed, and cotangent g:
+    (I - l l^T) / L [(g . l) w + (l . w) g]."""
+    l = springs.unit
+    gl, wl = dot(g, l), dot(w, l)
+    inside = gl[:, None] * w + wl[:, None] * g
+    return (inside - dot(inside, l)[:, None] * l) * springs.inverse[:, None]
+
+
+# --- spring and damper forces -------------------------------------------------------------------
+
+def spring_forces(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    springs = geometry(physical, x)
+    w = per_spring(physical, v)
+    factor = -physical.ks * (springs.length - physical.rest) - physical.kd * dot(w, springs.unit)
+    force = np.zeros_like(x)
+    scatter(physical, factor[:, None] * springs.unit, force)
+    return force
+
+
+def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+    """Add g . d(spring_forces)/d(x, v, ks, kd, r) into x_bar, v_bar and bar."""
+    springs = geometry(physical, x)
+    l, length = springs.unit, springs.length
+    w, gs = per_spring(physical, v), per_spring(physical, g)
+    gl, wl = dot(gs, l), dot(w, l)
+    stretch = np.where(length > 0.0, length - physical.rest, 0.0)
+    # d[(L - r) l] = l l^T dd + (L - r) / L (I - l l^T) dd
+    across = (gs - gl[:, None] * l) * (stretch * springs.inverse)[:, None]
+    d_bar = -physical.ks[:, None] * (gl[:, None] * l + across)
+    d_bar -= physical.kd[:, None] * projection_vjp(springs, w, gs)
+    scatter(physical, d_bar, x_bar)
+    scatter(physical, -(physical.kd * gl)[:, None] * l, v_bar)
+    bar.ks -= stretch * gl
+    bar.kd -= wl * gl
+    bar.rest += physical.ks * gl * (length > 0.0)
+
+
+# --- accelerations (the explicit methods' derivative) -------------------------------------------
+
+def accelerations(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """dv/dt before contact: forces.free_accelerations."""
+    w = physical.inv_mass
+    force = spring_forces(physical, x, v)
+    return (w[:, None] * (force - physical.drag[:, None] * v)
+            + np.where(physical.free[:, None], physical.gravity, 0.0))
+
+
+def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+    """Add g . d(accelerations)/d(everything) into x_bar, v_bar and bar."""
+    w = physical.inv_mass
+    force = spring_forces(physical, x, v)
+    net = force - physical.drag[:, None] * v
+    free = physical.free
+    bar.gravity += g[free].sum(axis=0)
+    bar.mass -= np.where(free, w * w * dot(g, net), 0.0)
+    bar.drag -= w * dot(g, v)
+    v_bar -= (w * physical.drag)[:, None] * g
+    spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+
+
+# --- the implicit system (implicit/jacobian.py) -------------------------------------------------
+
+def stiffness_coefficients(physical: Physical, springs: Springs):
+    """(along, across, d across / dL, d across / dr) with the compressive part clamped to 0."""
+    stretched = springs.length > physical.rest
+    ratio = np.where(stretched, 1.0 - physical.rest * springs.inverse, 0.0)
+    across = physical.ks * ratio
+    return (physical.ks - across, across,
+            np.where(stretched, physical.ks * physical.rest * springs.inverse ** 2, 0.0),
+            np.where(stretched, -physical.ks * springs.inverse, 0.0), ratio)
+
+
+def stiffness_product(physical: Physical, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """(dF/dx) u at x, clamped as the matrix is (jacobian.add_stiffness_product)."""
+    springs = geometry(physical, x)
+    along, across, _, _, _ = stiffness_coefficients(physical, springs)
+    us = per_spring(physical, u)
+    l = springs.unit
+    values = -(along * dot(l, us))[:, None] * l - across[:, None] * us
+    out = np.zeros_like(x)
+    scatter(physical, values * (springs.length > 0.0)[:, None], out)
+    return out
+
+
+def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
+    """Add g . d[(dF/dx)(x) u]/d(x, u, ks, r) into x_bar, u_bar and bar."""
+    springs = geometry(physical, x)
+    along, across, across_dl, across_dr, ratio = stiffness_coefficients(physical, springs)
+    l = springs.unit
+    us, gs = per_spring(physical, u), per_spring(physical, g)
+    lu, lg = dot(l, us), dot(l, gs)
+    # out_a = -(ks P(u) + across (u - P(u))), P(u) = (l . u) l
+    sideways = dot(gs, us) - lu * lg    # g . (u - P(u))
+    d_bar = -(along[:, None] * projection_vjp(springs, us, gs) + (across_dl * sideways)[:, None] * l)
+    scatter(physical, d_bar, x_bar)
+    scatter(physical, -(physical.ks * lg)[:, None] * l - across[:, None] * (gs - lg[:, None] * l),
+            u_bar)
+    real = springs.length > 0.0
+    bar.ks -= np.where(real, lu * lg + ratio * sideways, 0.0)
+    bar.rest -= np.where(real, across_dr * sideways, 0.0)
+
+
+def system_product(physical: Physical, x: np.ndarray, u: np.ndarray, h: float) -> np.ndarray:
+    """A u, A = M + h (drag) - h dF/dv - h^2 dF/dx at x (implicit_euler's matrix)."""
+    springs = geometry(physical, x)
+    along, across, _, _, _ = stiffness_coefficients(physical, springs)
+    l = springs.unit
+    us = per_spring(physical, u)
+    p = h * physical.kd + h * h * along
+    values = (p * dot(l, us))[:, None] * l + (h * h * across)[:, None] * us
+    out = (physical.solve_mass + h * physical.drag)[:, None] * u
+    scatter(physical, values * (springs.length > 0.0)[:, None], out)
+    return out
+
+
+def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
+    """Add g . d(A(x) u)/d(x, ks, kd, r, mass, drag), u held fixed, into x_bar and bar."""
+    bar.mass += np.where(physical.free, dot(g, u), 0.0)
+    bar.drag += h * dot(g, u)
+    springs = geometry(physical, x)
+    l = springs.unit
+    us, gs = per_spring(physical, u), per_spring(physical, g)
+    real = springs.length > 0.0
+    bar.kd += np.where(real, h * dot(l, us) * dot(l, gs), 0.0)
+    # the stiffness part is -h^2 (dF/dx) u
+    u_scratch = np.zeros_like(u)
+    stiffness_product_vjp(physical, x, u, -h * h * g, x_bar, u_scratch, bar)
+    d_bar = h * physical.kd[:, None] * projection_vjp(springs, us, gs)
+    scatter(physical, d_bar, x_bar)

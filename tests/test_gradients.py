@@ -1,0 +1,185 @@
+"""Gradients through the simulation (springsim.gradients) against central finite differences of
+the forward run itself: each parameter kind under each integrator with an adjoint, on a 3 x 3 x 3
+cube with one pinned corner (so that its springs stretch) and a few steps."""
+import numpy as np
+import pytest
+
+from springsim.bodies.cube import Cube
+from springsim.errors import SceneError
+from springsim.gradients import gradient, prepare, run_gradient
+from springsim.gradients.losses import as_loss
+from springsim.scene import Scene
+
+STEPS = {"symplectic_euler": 0.002, "rk4": 0.002, "implicit_euler": 0.01}
+TIGHT = {"implicit_euler": {"cg_tolerance": 1e-13, "cg_max_iterations": 2000}}
+
+
+def small_scene():
+    return Scene(bodies=[Cube(particles_per_edge=3, edge_length=1.0, position=(0.0, 2.0, 0.0),
+                              velocity=(0.3, 0.1, -0.2), pinned=(0,))], terrains=[], drag=0.1)
+
+
+def weighted_squares(positions):
+    weights = np.linspace(1.0, 2.0, positions.size).reshape(positions.shape)
+    return float(np.sum(weights * positions ** 2)), 2.0 * weights * positions
+
+
+def jittered(scene):
+    """Initial positions off the rest shape: at rest every spring sits at L = r, where
+    implicit_euler's matrix drops the compressive stiffness (implicit/jacobian.py), a kink that
+    a particle's own move crosses (its derivative is one-sided there)."""
+    from springsim.model import build_model
+    model = build_model(scene)
+    offsets = np.random.default_rng(1).normal(0.0, 0.01, model.initial_positions.shape)
+    return model.initial_positions + offsets
+
+
+def loss_at(scene, integrator, wrt=(), values=None, start=None):
+    dt = STEPS[integrator]
+    values = dict(values or {})
+    if start is not None:
+        values.setdefault("initial_positions", start)
+        wrt = list(dict.fromkeys(list(wrt) + ["initial_positions"]))
+    _, simulation, _ = prepare(scene, list(wrt) or ["drag"], values, integrator=integrator,
+                               dt=dt, **TIGHT.get(integrator, {}))
+    loss = as_loss(weighted_squares, 1 / (4 * dt))
+    return run_gradient(simulation, loss, 10 * dt).loss
+
+
+def central_difference(scene, integrator, name, base, component, step, start=None):
+    values = []
+    for sign in (1.0, -1.0):
+        value = np.array(base, float)
+        value.ravel()[component] += sign * step
+        values.append(loss_at(scene, integrator, [name], {name: value}, start))
+    return (values[0] - values[1]) / (2 * step)
+
+
+SCENE_KEYS = ["bodies.0.structural.ks", "bodies.0.shear.kd", "bodies.0.bend.ks", "gravity",
+              "drag", "bodies.0.particle_mass", "bodies.0.velocity", "bodies.0.position"]
+
+
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_scene_keys_match_finite_differences(integrator):
+    scene = small_scene()
+    dt = STEPS[integrator]
+    _, grads = gradient(scene, weighted_squares, SCENE_KEYS, duration=10 * dt,
+                        integrator=integrator, dt=dt, fps=1 / (4 * dt),
+                        **TIGHT.get(integrator, {}))
+    from springsim.gradients.parameters import parameter
+    for name in SCENE_KEYS:
+        base = parameter(scene, name).value
+        for j in range(base.size):
+            step = 1e-5 * max(abs(base.ravel()[j]), 1.0)
+            expected = central_difference(scene, integrator, name, base, j, step)
+            got = np.ravel(grads[name])[j]
+            assert got == pytest.approx(expected, rel=1e-5, abs=1e-7), \
+                name
+
+
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_model_arrays_match_finite_differences(integrator):
+    """Per-particle and per-spring arrays: a few components each, by finite differences (the
+    absolute floor is rounding: the loss is about 50, its differences over 1e-6)."""
+    scene = small_scene()
+    dt = STEPS[integrator]
+    names = ["initial_positions", "initial_velocities", "masses", "rest_lengths",
+             "bodies.0.stiffness_field", "spring_kd"]
+    start = jittered(scene)
+    _, simulation, params = prepare(scene, names, {"initial_positions": start},
+                                    integrator=integrator, dt=dt, **TIGHT.get(integrator, {}))
+    model = simulation.model
+    result = run_gradient(simulation, as_loss(weighted_squares, 1 / (4 * dt)), 10 * dt)
+    for p in params:
+        grad = np.ravel(p.gradient(scene, model, result))
+        base = p.read(model)
+        for j in (1, 5, grad.size - 1):
+            step = 1e-6 * max(abs(base.ravel()[j]), 1.0)
+            expected = central_difference(scene, integrator, p.name, base, j, step, start)
+            assert grad[j] == pytest.approx(expected, rel=1e-5, abs=1e-7), (p.name, j)
+
+
+def test_newton_iterations_and_determinism():
+    """Three Newton iterations (two solved again by the adjoint); the same bits whatever the
+    thread count."""
+    scene = small_scene()
+    options = {"integrator": "implicit_euler", "dt": 0.01, "duration": 0.05, "fps": 50,
+                   "newton_iterations": 3, "cg_tolerance": 1e-13}
+    one = gradient(scene, weighted_squares, ["bodies.0.structural.ks"], threads=1, **options)
+    two = gradient(scene, weighted_squares, ["bodies.0.structural.ks"], threads=2, **options)
+    assert one[1]["bodies.0.structural.ks"] == two[1]["bodies.0.structural.ks"]
+    base = 2000.0
+    values = []
+    for sign in (1, -1):
+        changed = Scene(**scene.__dict__)
+        changed.bodies = [Cube(**scene.bodies[0].__dict__)]
+        changed.bodies[0].structural = type(scene.bodies[0].structural)(base + sign * 0.02, 60.0)
+        values.append(gradient(changed, weighted_squares, ["drag"], threads=1, **options)[0])
+    assert one[1]["bodies.0.structural.ks"] == pytest.approx((values[0] - values[1]) / 0.04,
+                                                             rel=1e-5)
+
+
+def test_checkpoints_give_the_same_gradient():
+    scene = small_scene()
+    names = ["bodies.0.structural.ks", "initial_velocities"]
+    _, simulation, _ = prepare(scene, names, integrator="rk4", dt=0.002)
+    loss = as_loss(weighted_squares, 100)
+    kept = run_gradient(simulation, loss, 0.04)
+    _, simulation, _params = prepare(scene, names, integrator="rk4", dt=0.002)
+    strided = run_gradient(simulation, loss, 0.04, memory_limit=27 * 48 * 8)
+    assert strided.stored_bytes < kept.stored_bytes
+    np.testing.assert_array_equal(kept.v0_bar, strided.v0_bar)
+    np.testing.assert_array_equal(kept.bar.ks, strided.bar.ks)
+
+
+@pytest.mark.parametrize("wrt, message", [
+    (["bodies.0.nothing"], "names no parameter"),
+    (["bodies.0.particles_per_edge"], "cannot be differentiated"),
+    (["bodies.3.stiffness_field"], "names no body"),
+])
+def test_bad_parameters_are_one_line(wrt, message):
+    with pytest.raises(SceneError, match=message):
+        gradient(small_scene(), weighted_squares, wrt, duration=0.01, integrator="rk4", dt=0.002)
+
+
+def test_nan_loss_and_untouched_terrain():
+    with pytest.raises(SceneError, match="finite"):
+        gradient(small_scene(), lambda x: (float("nan"), 0 * x), ["drag"], duration=0.01,
+                 integrator="rk4", dt=0.002)
+    from springsim.terrains.plane import Plane
+    scene = small_scene()
+    scene.bodies[0].pinned = ()
+    scene.terrains = [Plane(point=(0.0, 0.0, 0.0))]   # 1.5 m below: not reached in 0.1 s
+    _, grads = gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4",
+                            dt=0.002)
+    assert np.isfinite(grads["drag"])
+    scene.terrains = [Plane(point=(0.0, 1.48, 0.0))]  # reached within 0.1 s of falling
+    with pytest.raises(SceneError, match="terrain contact"):
+        gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4", dt=0.002)
+
+
+def test_fit_command_recovers_stiffness(tmp_path, capsys):
+    """`springsim fit` on a take of the small cube with soft structural springs (ks = 200, so
+    that 0.3 s of swinging depends on them), started at 400."""
+    import json
+
+    from springsim.cli import main
+    from springsim.scenefile import scene_to_toml
+
+    scene_file = tmp_path / "cube.toml"
+    scene = small_scene()
+    scene.bodies[0].structural = type(scene.bodies[0].structural)(200.0, 60.0)
+    scene_file.write_text(scene_to_toml(scene))
+    options = ["--integrator", "rk4", "--dt", "0.002"]
+    take = tmp_path / "take.npz"
+    assert main(["run", str(scene_file), *options, "--duration", "0.3", "--fps", "100",
+                 "--out", str(take), "--quiet"]) == 0
+    out = tmp_path / "fitted.toml"
+    assert main(["fit", str(scene_file), *options, "--observed", str(take), "--fit",
+                 "bodies.0.structural.ks", "--set", "bodies.0.structural.ks=400",
+                 "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0].startswith("iteration 1: loss")
+    answer = json.loads(lines[-1])
+    assert answer["fitted"]["bodies.0.structural.ks"] == pytest.approx(200.0, rel=1e-2)
+    assert "ks = " in out.read_text()
