@@ -28,7 +28,7 @@ from .physics import Physical
 # the model arrays that the adjoint covers (Physical) and that a SceneValue may change
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
            "spring_runs", "run_rest_length", "loose_springs"}
-MAX_GROUPS = 32767   # spring_group is int16
+MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
 
 
 def parameter(scene, name):
@@ -237,7 +237,7 @@ def regrouped(model, ks, kd):
     if len(pairs) > MAX_GROUPS:
         raise SceneError("spring stiffness", f"{len(pairs)} distinct (ks, kd) pairs",
                          f"must be at most {MAX_GROUPS} (the model's parameter groups)")
-    group = group.ravel().astype(np.int16)
+    group = group.ravel().astype(np.int32)
     return dataclasses.replace(model, arrays=arrays._replace(
         spring_group=group, group_ks=pairs[:, 0].copy(), group_kd=pairs[:, 1].copy(),
         **build_spring_runs(arrays.springs, group, arrays.rest_length)))
