@@ -306,3 +306,9 @@ def test_a_triangle_mesh_cloth_drapes_over_a_sphere_without_entering_it(tmp_path
     assert distance.min() >= 0.3 - 1e-3
     assert x[:, 1].min() < 0.2            # the rim hangs down the sides
     assert x[:, 1].max() < 0.45           # and the cloth rests on the sphere, not above it
+
+
+def test_an_override_gives_the_grid_cloth_a_material():
+    scene = load_scene("cloth-hang", ["bodies.0.material.density=0.2"])
+    assert scene.bodies[0].material == ClothMaterial(density=0.2)
+    assert build_model(scene).mass.sum() == pytest.approx(0.2 * 16.0, rel=1e-12)
