@@ -6,15 +6,8 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
+import importlib
 from importlib.metadata import PackageNotFoundError, version as _version
-
-from .errors import SceneError, SimulationDiverged
-from .integrators import integrator_names
-from .presets import preset_names
-from .scene import Scene
-from .scenefile import load_scene
-from .simulation import Simulation
-from .sweeps import sweep
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
@@ -23,3 +16,21 @@ except PackageNotFoundError:              # a source tree on sys.path with no in
 
 __all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
            "integrator_names", "preset_names", "sweep"]
+
+# Where each public name lives, imported at its first use (PEP 562): the command line starts,
+# and takes over Ctrl-C (signals.py), before NumPy and Numba load, which takes about a second.
+_PUBLIC = {"Simulation": "simulation", "Scene": "scene", "SceneError": "errors",
+           "SimulationDiverged": "errors", "load_scene": "scenefile",
+           "integrator_names": "integrators", "preset_names": "presets", "sweep": "sweeps"}
+
+
+def __getattr__(name):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'springsim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted([*globals(), *_PUBLIC])
