@@ -230,7 +230,9 @@ def warm_kernels(scenes) -> None:
     Errors are left to the runs themselves, which report them.
     """
     from .simulation import Simulation
+    from .warmup import announced
 
     for scene in scenes:
-        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError):
+        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError), \
+                announced(scene.integrator):
             Simulation(copy.deepcopy(scene)).step(1)
