@@ -38,6 +38,17 @@ def test_a_signal_inside_deferred_waits_for_the_block_to_end(signum, raised):
     assert reached == ["end of block"]
 
 
+def test_code_run_from_c_never_gets_the_interrupt():
+    """LLVM's callbacks (llvmlite) and strings an extension runs (PyRun_String) drop or
+    mishandle an exception: inside a compile too, the signal waits."""
+    with pytest.raises(KeyboardInterrupt), signals.deferred():
+        frame_in("numba.core.dispatcher", "_compile_for_args", lambda frame: frame_in(
+            "llvmlite.binding.executionengine", "_raw_object_cache_notify",
+            lambda inner: signals.on_signal(signal.SIGINT, inner)))
+        exec("import sys\nsignals.on_signal(signal.SIGINT, sys._getframe())",
+             {"signals": signals, "signal": signal})
+
+
 def test_a_signal_outside_deferred_is_raised_at_once():
     reached = []
     with signals.handled(), pytest.raises(signals.Terminated):
@@ -52,7 +63,8 @@ def frame_in(module: str, function: str, action):
     """Run ``action(frame)`` in a function ``function`` of a module named ``module``, as the
     handler would find it called from there."""
     namespace = {"__name__": module, "action": action, "sys": sys}
-    exec(f"def {function}():\n    return action(sys._getframe())", namespace)
+    source = f"def {function}():\n    return action(sys._getframe())"
+    exec(compile(source, f"<{module}>", "exec"), namespace)
     return namespace[function]()
 
 
@@ -67,6 +79,17 @@ def test_numba_compiling_raises_at_once_and_a_numba_call_back_waits():
                  lambda frame: signals.on_signal(signal.SIGTERM, frame))
         reached.append("end of block")
     assert reached == ["end of block"]
+
+
+def test_code_run_from_c_never_gets_the_interrupt():
+    """LLVM's callbacks (llvmlite) and strings an extension runs (PyRun_String) drop or
+    mishandle an exception: inside a compile too, the signal waits."""
+    with pytest.raises(KeyboardInterrupt), signals.deferred():
+        frame_in("numba.core.dispatcher", "_compile_for_args", lambda frame: frame_in(
+            "llvmlite.binding.executionengine", "_raw_object_cache_notify",
+            lambda inner: signals.on_signal(signal.SIGINT, inner)))
+        exec("import sys\nsignals.on_signal(signal.SIGINT, sys._getframe())",
+             {"signals": signals, "signal": signal})
 
 
 def test_ctrl_c_during_a_step_from_python_leaves_the_state_whole(monkeypatch):

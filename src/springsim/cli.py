@@ -3,6 +3,7 @@ defines ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; 
 new file there. Modules import their heavy dependencies inside ``run`` so that start-up stays fast.
 """
 import argparse
+import contextlib
 import importlib
 import pkgutil
 import signal
@@ -60,7 +61,18 @@ def main(argv=None) -> int:
         except KeyboardInterrupt as interrupt:
             terminated = isinstance(interrupt, signals.Terminated)
             print("terminated" if terminated else "interrupted", file=sys.stderr)
+            _forget_unhandled_interrupt()
             return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+def _forget_unhandled_interrupt() -> None:
+    """CPython kills itself with SIGINT at exit, whatever main returns, once a KeyboardInterrupt
+    has left code that C ran with PyRun_String (an extension's lazy import); signals.py keeps
+    Ctrl-C out of such code, and this is the net under it: the interrupt was handled here."""
+    import ctypes
+
+    with contextlib.suppress(Exception):   # 3.11's flag; elsewhere it is not exported
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
 
 
 def quiet_overflow():

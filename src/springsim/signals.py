@@ -40,14 +40,14 @@ def exception_for(signum: int) -> KeyboardInterrupt:
 def on_signal(signum, frame):
     """The handler: raise, unless the main thread is inside a compiled call (module doc)."""
     global _pending
-    if _compiling(frame):
+    safe = _safe_to_raise(frame)
+    if safe:
         raise exception_for(signum)
     if _depth > 0:
         _pending = _pending or signum
         return
-    if _in_numba_callback(frame):
-        # a kernel called outside deferred() is calling back into Python: try again when it
-        # has returned
+    if safe is False:
+        # called back from C code outside deferred(): try again when it has returned
         threading.Timer(RESEND_AFTER, os.kill, (os.getpid(), signum)).start()
         return
     raise exception_for(signum)
@@ -63,19 +63,21 @@ def _module(frame) -> str:
     return frame.f_globals.get("__name__", "") or ""
 
 
-def _compiling(frame) -> bool:
-    """Whether the innermost Numba code running is the dispatcher compiling (or loading from
-    the cache) a kernel, which passes an exception raised in it on to its caller."""
+def _safe_to_raise(frame) -> bool | None:
+    """False where the innermost code that matters was called back from C code that drops an
+    exception: Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
+    (raising there hung the compile), or a string run with PyRun_String by an extension
+    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit). True
+    where it is Numba's dispatcher compiling a kernel, which passes an exception on to its
+    caller. None elsewhere: plain Python."""
     for each in _frames(frame):
-        if _module(each) == "numba.core.serialize":
-            return False          # unpickling for compiled code: not safe to raise in
-        if each.f_code.co_name == "_compile_for_args" and _module(each).startswith("numba"):
+        module = _module(each)
+        if (module == "numba.core.serialize" or module.startswith("llvmlite")
+                or each.f_code.co_filename == "<string>"):
+            return False
+        if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
             return True
-    return False
-
-
-def _in_numba_callback(frame) -> bool:
-    return any(_module(each).startswith("numba") for each in _frames(frame))
+    return None
 
 
 @contextlib.contextmanager
