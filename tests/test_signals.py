@@ -70,8 +70,8 @@ def test_numba_compiling_raises_at_once_and_a_numba_call_back_waits():
 
 
 def test_code_run_from_c_never_gets_the_interrupt():
-    """LLVM's callbacks (llvmlite) and strings an extension runs (PyRun_String) drop or
-    mishandle an exception: inside a compile too, the signal waits."""
+    """LLVM's callbacks (llvmlite), strings an extension runs (PyRun_String) and finalizers
+    drop or mishandle an exception: inside a compile too, the signal waits."""
     reached = []
     with pytest.raises(KeyboardInterrupt), signals.deferred():
         frame_in("numba.core.dispatcher", "_compile_for_args", lambda frame: frame_in(
@@ -79,6 +79,7 @@ def test_code_run_from_c_never_gets_the_interrupt():
             lambda inner: signals.on_signal(signal.SIGINT, inner)))
         exec("import sys\nsignals.on_signal(signal.SIGINT, sys._getframe())",
              {"signals": signals, "signal": signal})
+        frame_in("weakref", "__call__", lambda frame: signals.on_signal(signal.SIGINT, frame))
         reached.append("end of block")
     assert reached == ["end of block"]
 

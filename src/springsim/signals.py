@@ -63,9 +63,17 @@ def _module(frame) -> str:
     return frame.f_globals.get("__name__", "") or ""
 
 
+def _ignores_exceptions(frame) -> bool:
+    """A weakref callback or finalizer, or ``__del__``: Python prints "Exception ignored" and
+    goes on, so the signal would be lost (the import lock's weakref callback, for one)."""
+    code = frame.f_code
+    return (code.co_name == "__del__" or _module(frame) == "weakref"
+            or (code.co_name == "cb" and "importlib._bootstrap" in code.co_filename))
+
+
 def _safe_to_raise(frame) -> bool | None:
-    """False where the innermost code that matters was called back from C code that drops an
-    exception: Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
+    """False where the innermost code that matters was called back from code that drops an
+    exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
     (raising there hung the compile), or a string run with PyRun_String by an extension
     (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit). True
     where it is Numba's dispatcher compiling a kernel, which passes an exception on to its
@@ -73,7 +81,7 @@ def _safe_to_raise(frame) -> bool | None:
     for each in _frames(frame):
         module = _module(each)
         if (module == "numba.core.serialize" or module.startswith("llvmlite")
-                or each.f_code.co_filename == "<string>"):
+                or each.f_code.co_filename == "<string>" or _ignores_exceptions(each)):
             return False
         if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
             return True
