@@ -8,6 +8,16 @@ integrators. SI units throughout: metres, kilograms, seconds.
 """
 import importlib
 from importlib.metadata import PackageNotFoundError, version as _version
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:   # what the reference documents; imported at first use at run time (below)
+    from .errors import SceneError, SimulationDiverged
+    from .integrators import integrator_names
+    from .presets import preset_names
+    from .scene import Scene
+    from .scenefile import load_scene
+    from .simulation import Simulation
+    from .sweeps import sweep
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
