@@ -63,6 +63,15 @@ def _module(frame) -> str:
     return frame.f_globals.get("__name__", "") or ""
 
 
+def _run_from_c(frame) -> bool:
+    """A string an extension runs with PyRun_String, under other Python code (``python -c``'s
+    own program is a "<string>" module too, but the outermost frame; its functions are not
+    modules)."""
+    code = frame.f_code
+    return (code.co_filename == "<string>" and code.co_name == "<module>"
+            and frame.f_back is not None)
+
+
 def _ignores_exceptions(frame) -> bool:
     """A weakref callback or finalizer, or ``__del__``: Python prints "Exception ignored" and
     goes on, so the signal would be lost (the import lock's weakref callback, for one)."""
@@ -81,7 +90,7 @@ def _safe_to_raise(frame) -> bool | None:
     for each in _frames(frame):
         module = _module(each)
         if (module == "numba.core.serialize" or module.startswith("llvmlite")
-                or each.f_code.co_filename == "<string>" or _ignores_exceptions(each)):
+                or _run_from_c(each) or _ignores_exceptions(each)):
             return False
         if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
             return True
