@@ -13,6 +13,7 @@ from .energy import gravitational_energy, kinetic_energy, spring_energy
 from .recording_layout import LAYOUT_KEYS, layout_arrays
 from .safe_files import atomic_output
 from .sampling import frame_steps
+from .warmup import announced
 
 
 
@@ -107,7 +108,8 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
         recording.capture(0, simulation)
     else:
         recording, first = start
-    simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
+    with announced(simulation.integrator.name, say=progress):
+        simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
     started = time.perf_counter() - recording.wall_seconds
     with tqdm(total=int(steps[-1]), initial=int(steps[first - 1]), unit="step",
               desc=simulation.scene.name, leave=False, file=sys.stderr,

@@ -10,6 +10,7 @@ import numbers
 
 import numpy as np
 
+from . import signals
 from .energy import energies
 from .errors import SceneError, SimulationDiverged, require
 from .integrators import available_threads, get_integrator
@@ -107,11 +108,13 @@ class Simulation:
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
         self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
-        done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
-                                                 self.threads)
-        self._lists_left = (self.state.pairs, self.state.solve_pairs)
-        self.state.time += done * self.dt
-        self.state.steps += done
+        # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
+        with signals.deferred():
+            done, particle = self.integrator.advance(self.model, self.state, self.dt,
+                                                     int(count), self.threads)
+            self._lists_left = (self.state.pairs, self.state.solve_pairs)
+            self.state.time += done * self.dt
+            self.state.steps += done
         if particle >= 0:
             v = self.state.velocities[particle]
             with np.errstate(over="ignore", invalid="ignore"):   # inf is the honest answer

@@ -85,6 +85,8 @@ def run(args) -> int:
     if args.checkpoint_every is not None:
         check_interval(args.checkpoint_every)
     scene = resumed.scene if resumed else scene_from_arguments(args)
+    if not resumed:
+        args.fps = step_fps(scene.dt, args.fps, quiet=args.quiet)
     out = args.out or default_output(scene.name)
     # Every output and the frames' memory are checked before simulating, so that a long run
     # never ends in a typo or an allocation the machine cannot hold.
@@ -121,6 +123,21 @@ def run(args) -> int:
     if not args.quiet:
         print(f"  {'wrote':<22}{', '.join(written)}")
     return 0
+
+
+def step_fps(dt: float, fps: float, quiet: bool = False) -> float:
+    """The frame rate to record at: ``fps``, or one frame a step (1/dt) when a step is longer
+    than a frame, said on stderr. Frames between two steps would repeat the state before them:
+    a take exported from them stutters (every other frame frozen at dt = 2/fps)."""
+    from ..sampling import check_fps
+
+    check_fps(fps)
+    if dt * fps <= 1:
+        return fps
+    if not quiet:
+        print(f"springsim run: dt = {dt:g} s is longer than 1/fps = {1 / fps:g} s: recording "
+              f"a frame at every step, at the steps' own times ({1 / dt:g} fps)", file=sys.stderr)
+    return 1 / dt
 
 
 def write_video_of(simulation, recording, path) -> str | None:

@@ -9,6 +9,7 @@ extension picks the encoding: .usda text, .usdc binary (crate), .usd binary.
 """
 import numpy as np
 
+from .. import signals
 from ..errors import require
 from ..render import colors
 from .geometry import body_pieces, terrain_meshes, unique_names
@@ -25,13 +26,25 @@ def outputs(path) -> list:
 
 def check_available() -> None:
     try:
-        import pxr.Usd  # noqa: F401
+        _import_usd()
     except ImportError:
         require(False, "format", "usd", f"needs Pixar's usd-core: {INSTALL}")
 
 
+def _import_usd() -> None:
+    """Load usd-core's modules. Its C++ import code catches an exception raised while it runs
+    and prints a warning, so Ctrl-C there would be lost: the signal waits for the imports."""
+    with signals.deferred():
+        import pxr.Gf
+        import pxr.Tf
+        import pxr.Usd
+        import pxr.UsdGeom
+        import pxr.Vt  # noqa: F401
+
+
 def write(take, path) -> list:
     """Write ``take`` to the USD file ``path`` (its suffix picks the encoding)."""
+    _import_usd()
     from pxr import Usd, UsdGeom
 
     stage = Usd.Stage.CreateInMemory()
