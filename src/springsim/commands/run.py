@@ -86,7 +86,7 @@ def run(args) -> int:
         check_interval(args.checkpoint_every)
     scene = resumed.scene if resumed else scene_from_arguments(args)
     if not resumed:
-        args.fps = step_fps(scene.dt, args.fps, quiet=args.quiet)
+        args.fps = step_fps(scene.dt, args.fps, duration=scene.duration, quiet=args.quiet)
     out = args.out or default_output(scene.name)
     # Every output and the frames' memory are checked before simulating, so that a long run
     # never ends in a typo or an allocation the machine cannot hold.
@@ -125,15 +125,18 @@ def run(args) -> int:
     return 0
 
 
-def step_fps(dt: float, fps: float, quiet: bool = False) -> float:
+def step_fps(dt: float, fps: float, duration: float | None = None, quiet: bool = False) -> float:
     """The frame rate to record at: ``fps``, or one frame a step (1/dt) when a step is longer
-    than a frame, said on stderr. Frames between two steps would repeat the state before them:
-    a take exported from them stutters (every other frame frozen at dt = 2/fps)."""
-    from ..sampling import check_fps
+    than a frame, said on stderr once the frame count is known to be allowed (bad input is one
+    line). Frames between two steps would repeat the state before them: a take exported from
+    them stutters (every other frame frozen at dt = 2/fps)."""
+    from ..sampling import check_fps, frame_count
 
     check_fps(fps)
     if dt * fps <= 1:
         return fps
+    if duration is not None:
+        frame_count(duration, 1 / dt, dt)
     if not quiet:
         print(f"springsim run: dt = {dt:g} s is longer than 1/fps = {1 / fps:g} s: recording "
               f"a frame at every step, at the steps' own times ({1 / dt:g} fps)", file=sys.stderr)
