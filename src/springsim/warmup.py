@@ -79,24 +79,3 @@ def _spin(stream, stop: threading.Event) -> None:
         stream.flush()
     stream.write("\r" + " " * 24 + "\r")
     stream.flush()
-
-
-def warm(integrators, say=print) -> list:
-    """Compile (or load) every kernel a run of each integrator uses: one step of a small jelly
-    cube on the plane and of a small cloth on a ball; (integrator, seconds) for each."""
-    from .scenefile import load_scene
-    from .simulation import Simulation
-
-    scenes = [load_scene("jelly-plane", ["bodies.0.particles_per_edge=3"]),
-              load_scene("cloth-balls", ["bodies.0.particles_per_edge=4"])]
-    timings = []
-    for integrator in integrators:
-        started = time.perf_counter()
-        with announced(integrator, say=False):
-            for scene in scenes:
-                simulation = Simulation(scene, integrator=integrator)
-                simulation.step(1)
-                simulation.energy()
-        timings.append((integrator, time.perf_counter() - started))
-        say(f"  {integrator:<18}{timings[-1][1]:.1f} s")
-    return timings
