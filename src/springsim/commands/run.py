@@ -36,10 +36,13 @@ def add_arguments(parser) -> None:
                              "the output is the same as had it never stopped")
 
 
-def add_scene_arguments(parser, scene_optional: bool = False) -> None:
-    """The scene and the options that change it, shared with `springsim bench`."""
+def add_scene_arguments(parser, scene_optional: bool = False, recording: bool = False) -> None:
+    """The scene and the options that change it, shared with `springsim bench`; ``recording``:
+    the command also takes a recording in place of the scene."""
     parser.add_argument("scene", nargs="?" if scene_optional else None,
-                        help="a built-in scene (see `springsim scenes`) or a .toml file")
+                        help="a built-in scene (see `springsim scenes`) or a .toml file"
+                             + (", or a recording (an NPZ file of `springsim run`)"
+                                if recording else ""))
     parser.add_argument("--integrator", help="integrator name (default: the scene's)")
     parser.add_argument("--dt", type=float, metavar="SECONDS",
                         help="time step in s (default: the scene's)")

@@ -1,0 +1,93 @@
+"""`springsim render` and `springsim export` take a recording (the NPZ of `springsim run`) as well
+as a scene, a recording of any size; a file that is neither gets one line saying so (issue 28,
+item 4).
+
+Oracle: the frames the renderer is handed are the recording's own (at its rate) or the linear
+interpolation between its two frames around each new time; a scene exported directly gives the
+same cache, byte for byte, as its recording exported."""
+import numpy as np
+import pytest
+
+import springsim.render
+from springsim.cli import main
+from springsim.recording import write_npz
+
+SMALL = ["--set", "bodies.0.particles_per_edge=3", "--duration", "0.2", "--fps", "20", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def take(tmp_path_factory):
+    """jelly-plane's cube of 3 x 3 x 3, 0.2 s at 20 fps, and a copy padded beyond 16 MB."""
+    folder = tmp_path_factory.mktemp("takes")
+    path = folder / "take.npz"
+    assert main(["run", "jelly-plane", *SMALL, "--out", str(path)]) == 0
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files}
+    big = folder / "big.npz"
+    write_npz(big, {**arrays, "padding": np.ones(17 * 2 ** 20, np.uint8)})
+    assert big.stat().st_size > 16 * 2 ** 20
+    return path, big, arrays
+
+
+@pytest.fixture
+def rendered(monkeypatch):
+    calls = []
+
+    def render_video(model, times, positions, path, *, fps, **options):
+        calls.append((model.particle_count, np.array(times), np.array(positions), fps))
+        return path
+
+    monkeypatch.setattr(springsim.render, "render_video", render_video)
+    return calls
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_render_draws_a_recordings_own_frames(take, rendered, tmp_path, capsys, which):
+    path = take[which]
+    arrays = take[2]
+    assert main(["render", str(path), "--out", str(tmp_path / "x.mp4"), "--quiet"]) == 0
+    (particles, times, positions, fps), = rendered
+    assert capsys.readouterr().err == ""
+    assert fps == 20 and particles == arrays["positions"].shape[1]
+    np.testing.assert_array_equal(times, arrays["time"])
+    np.testing.assert_array_equal(positions, arrays["positions"])
+
+
+def test_render_at_another_rate_interpolates_between_recorded_frames(take, rendered, tmp_path):
+    _, _, arrays = take
+    assert main(["render", str(take[0]), "--out", str(tmp_path / "x.gif"), "--fps", "40",
+                 "--duration", "0.1", "--quiet"]) == 0
+    (_, times, positions, fps), = rendered
+    recorded = arrays["positions"]
+    np.testing.assert_allclose(times, np.arange(5) / 40, atol=1e-12)
+    np.testing.assert_allclose(positions[::2], recorded[:3], atol=1e-12)
+    np.testing.assert_allclose(positions[1::2], (recorded[:2] + recorded[1:3]) / 2, atol=1e-12)
+
+
+def test_a_scene_exported_directly_is_its_recording_exported(take, tmp_path):
+    scene = tmp_path / "cube.toml"
+    scene.write_text('name = "cube"\nduration = 0.1\n[[bodies]]\ntype = "cube"\n'
+                     'particles_per_edge = 3\nposition = [0.0, 1.0, 0.0]\n')
+    recording = tmp_path / "cube.npz"
+    assert main(["run", str(scene), "--out", str(recording), "--quiet"]) == 0
+    assert main(["export", "--quiet", str(recording), str(tmp_path / "a.pc2")]) == 0
+    assert main(["export", "--quiet", str(scene), str(tmp_path / "b.pc2")]) == 0
+    assert (tmp_path / "a.pc2").read_bytes() == (tmp_path / "b.pc2").read_bytes()
+
+
+@pytest.mark.parametrize("command", [["render", "--out", "x.mp4"], ["export", "x.usda"]])
+def test_a_file_that_is_neither_gets_one_line_saying_so(tmp_path, capsys, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "photo.jpg").write_bytes(b"\xff\xd8\xff\xe0\x81\x00 binary")
+    assert main([command[0], "photo.jpg", *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"springsim {command[0]}: scene = 'photo.jpg': is neither a scene "
+                                "file (it is not UTF-8 text) nor a recording (it is not an NPZ "
+                                "file)"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["photo.jpg"]
+
+
+def test_run_given_a_recording_says_it_is_one(take, capsys):
+    assert main(["run", str(take[0]), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "is a recording (an NPZ file), not a scene" in err
