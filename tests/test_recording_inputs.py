@@ -10,6 +10,7 @@ import pytest
 
 import springsim.render
 from springsim.cli import main
+from springsim.export import load_take
 from springsim.recording import write_npz
 
 SMALL = ["--set", "bodies.0.particles_per_edge=3", "--duration", "0.2", "--fps", "20", "--quiet"]
@@ -91,3 +92,37 @@ def test_run_given_a_recording_says_it_is_one(take, capsys):
     assert main(["run", str(take[0]), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and "is a recording (an NPZ file), not a scene" in err
+
+
+def test_export_at_another_rate_and_start_frame_resamples_the_recording(take, tmp_path):
+    """Issue 28, item 5: a 20 fps take exported at 40 fps from frame 1001: the stage's rate is
+    40, its time codes 1001 ... 1008, and code 1001 + k holds the positions at k / 40 s (the
+    recorded frame, or the mean of the two around it); the PC2's header says 1001 too."""
+    import struct
+
+    from pxr import Usd, UsdGeom
+
+    path, _, arrays = take
+    usd, pc2 = tmp_path / "take.usda", tmp_path / "take.pc2"
+    assert main(["export", "--quiet", "--fps", "40", "--start-frame", "1001", str(path),
+                 str(usd), str(pc2)]) == 0
+    stage = Usd.Stage.Open(str(usd))
+    assert stage.GetTimeCodesPerSecond() == stage.GetFramesPerSecond() == 40
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1001, 1009)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/take/bodies/cube0"))
+    surface = np.unique(load_take(path).layout.bodies[0].surface)
+    recorded = arrays["positions"][:, surface]
+    seen = np.stack([np.asarray(mesh.GetPointsAttr().Get(1001 + k)) for k in range(9)])
+    np.testing.assert_allclose(seen[::2], recorded, atol=1e-5)
+    np.testing.assert_allclose(seen[1::2], (recorded[:-1] + recorded[1:]) / 2, atol=1e-5)
+    start, rate, samples = struct.unpack("<ffi", pc2.read_bytes()[20:32])
+    assert (start, rate, samples) == (1001.0, 1.0, 9)
+
+
+def test_export_numbers_the_first_frame_1_by_default(take, tmp_path):
+    from pxr import Usd
+
+    assert main(["export", "--quiet", str(take[0]), str(tmp_path / "take.usda")]) == 0
+    stage = Usd.Stage.Open(str(tmp_path / "take.usda"))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1, 5)
+

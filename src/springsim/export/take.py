@@ -17,6 +17,7 @@ from ..recording_layout import Layout, read_layout
 
 REQUIRED = ("time", "fps", "positions")
 NPZ_MAGIC = b"PK\x03\x04"   # an NPZ file is a ZIP archive
+START_FRAME = 1   # an exported take's first frame number: Blender's first frame, Houdini's too
 
 
 @dataclass(frozen=True)
@@ -27,7 +28,7 @@ class Take:
     positions: np.ndarray   # (F, P, 3) m
     layout: Layout
     arrays: dict            # everything the recording holds (energies, springs, ...)
-    start_frame: int = 0    # the number an exported file gives the first frame
+    start_frame: int = START_FRAME   # the number an exported file gives the first frame
 
     @property
     def frame_count(self) -> int:
