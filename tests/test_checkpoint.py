@@ -212,9 +212,37 @@ def test_a_run_killed_after_a_checkpoint_resumes_to_the_same_npz(tmp_path):
     assert_same_recording(tmp_path / "whole.npz", tmp_path / "part.npz")
 
 
-def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_path, capsys):
+def interrupted_after_first_checkpoint(monkeypatch):
+    original = checkpoint.write_checkpoint
+
+    def write_then_stop(*arguments):
+        original(*arguments)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    return original
+
+
+def test_a_completed_run_removes_its_checkpoint_and_an_interrupted_one_keeps_it(
+        tmp_path, monkeypatch, capsys):
     out = tmp_path / "x.npz"
     assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.npz"]
+    original = interrupted_after_first_checkpoint(monkeypatch)
+    assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    assert (tmp_path / "x.checkpoint.npz").exists()
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(tmp_path / "x.checkpoint.npz"), "--quiet"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.npz"]
+    capsys.readouterr()
+
+
+def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_path, capsys,
+                                                                            monkeypatch):
+    out = tmp_path / "x.npz"
+    assert main([*RUN, "--duration", "0.1", "--out", str(out)]) == 0
+    interrupted_after_first_checkpoint(monkeypatch)    # the run's checkpoint, its NPZ kept
+    assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    capsys.readouterr()
     saved = str(tmp_path / "x.checkpoint.npz")
     cases = [(["jelly-plane"], "give no scene"), (["--dt", "0.02"], "give no --dt"),
              (["--fps", "60"], "give no --fps"), (["--set", "drag=1"], "give no --set")]

@@ -126,3 +126,53 @@ def test_export_numbers_the_first_frame_1_by_default(take, tmp_path):
     stage = Usd.Stage.Open(str(tmp_path / "take.usda"))
     assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1, 5)
 
+
+def test_run_names_a_scene_files_output_after_the_file(tmp_path, monkeypatch, capsys):
+    """Issue 28, item 8: a copy of jelly-plane keeps the name "jelly-plane" inside, and its
+    output is still my_scene.npz (not jelly-plane.npz, the preset's own output)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_scene.toml").write_text('name = "jelly-plane"\nduration = 0.05\n[[bodies]]\n'
+                                            'type = "cube"\nparticles_per_edge = 3\n')
+    assert main(["run", "my_scene.toml", "--quiet"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["my_scene.npz", "my_scene.toml"]
+
+
+def test_render_of_a_recording_to_a_log_prints_one_line_per_stage_and_no_bars(take, tmp_path):
+    """Issue 28, item 8: with stderr a file (a log), `render` says what it does in one line on
+    stdout and draws no progress bar (tqdm's carriage returns) and nothing on stderr; the GIF has
+    the recording's 5 frames."""
+    import subprocess
+    import sys
+
+    import imageio.v3 as iio
+
+    out = tmp_path / "take.gif"
+    done = subprocess.run([sys.executable, "-m", "springsim", "render", str(take[0]), "--out",
+                           str(out), "--width", "64", "--height", "48"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == "" and done.stdout.splitlines()[0] == f"rendering 5 frames to {out}"
+    assert len(done.stdout.splitlines()) == 2    # and the summary: wrote ...
+    assert "\r" not in done.stdout + done.stderr
+    assert iio.imread(out, index=None).shape[:3] == (5, 48, 64)
+
+
+def test_a_re_run_sweep_says_it_skipped_the_runs_done_and_names_its_table(tmp_path, capsys,
+                                                                         monkeypatch):
+    """Issue 28, item 8: `--out s/` is reported as s/results.csv (not s//results.csv), and a
+    sweep run again says that its runs were already done."""
+    monkeypatch.chdir(tmp_path)
+    sweep = ["sweep", "jelly-plane", "--vary", "bodies.0.structural.ks=1000,2000", "--duration",
+             "0.05", "--workers", "1", "--set", "bodies.0.particles_per_edge=3", "--out", "s/"]
+    assert main(sweep) == 0
+    out, err = capsys.readouterr()
+    assert out.strip().endswith("wrote s/results.csv") and "already" not in err
+    assert main(sweep) == 0
+    out, err = capsys.readouterr()
+    assert "2 of 2 runs are already in s/results.csv; skipped them, running 0" in err
+
+
+def test_counts_of_one_are_singular():
+    from springsim.commands.stability import plural
+
+    assert (plural(1, "scene"), plural(2, "scene")) == ("1 scene", "2 scenes")

@@ -59,6 +59,8 @@ def run(args) -> int:
         plan_frames(scene.duration, args.fps, scene.dt, scene_counts(scene)[0])
         sim = Simulation(scene, threads=args.threads)
         model = sim.model
+        if not args.quiet and not sys.stderr.isatty():   # a log: one line, not a bar
+            print(f"simulating {scene.name} for {scene.duration:g} s", flush=True)
         times, positions = simulate_frames(sim, sim.scene.duration, args.fps,
                                            progress=not args.quiet)
     try:
