@@ -176,3 +176,28 @@ def test_counts_of_one_are_singular():
     from springsim.commands.stability import plural
 
     assert (plural(1, "scene"), plural(2, "scene")) == ("1 scene", "2 scenes")
+
+
+def test_a_printed_built_in_scene_explains_its_installed_mesh_path_and_both_ways_work(
+        tmp_path, capsys, monkeypatch):
+    """Issue 28, item 8: `springsim scenes jelly-torus > my.toml` names the installed mesh by
+    its absolute path and says so, with the way to keep the mesh beside the scene; both files
+    load from another folder, the second with the copy."""
+    import shutil
+    from pathlib import Path
+
+    from springsim.scenefile import load_scene
+
+    assert main(["scenes", "jelly-torus"]) == 0
+    text = capsys.readouterr().out
+    (tmp_path / "my.toml").write_text(text)
+    monkeypatch.chdir(Path("/"))
+    installed = load_scene(str(tmp_path / "my.toml")).bodies[0].file
+    assert Path(installed).is_absolute() and Path(installed).is_file()
+    lines = text.splitlines()
+    at = lines.index(f'file = "{installed}"')
+    assert "installed with springsim" in lines[at - 3] and 'file = "torus.obj"' in lines[at - 2]
+    shutil.copy(installed, tmp_path / "torus.obj")
+    lines[at] = 'file = "torus.obj"'
+    (tmp_path / "mine.toml").write_text("\n".join(lines))
+    assert load_scene(str(tmp_path / "mine.toml")).bodies[0].file == str(tmp_path / "torus.obj")
