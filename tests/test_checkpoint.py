@@ -257,3 +257,26 @@ def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_
     assert code == 2 and "--resume CHECKPOINT" in err
     code, err = main([*RUN, "--checkpoint-every", "nan"]), capsys.readouterr().err
     assert code == 2 and err.startswith("springsim run: --checkpoint-every = nan")
+
+
+def test_a_resumed_runs_wall_time_includes_the_time_before_it_stopped(tmp_path, monkeypatch):
+    """Issue 28, item 8: after --resume the summary said "6.69 s stepping, 4.01 s with
+    recording": the checkpoint kept the stepping time so far but not the wall time. The wall
+    time (stepping and recording) is never less than the stepping time."""
+    out = tmp_path / "x.npz"
+    original = checkpoint.write_checkpoint
+
+    def write_then_stop(path, simulation, recording, frame, *rest):
+        original(path, simulation, recording, frame, *rest)
+        if frame == 10:
+            raise KeyboardInterrupt
+    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    assert main([*RUN, "--duration", "0.5", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    with np.load(tmp_path / "x.checkpoint.npz") as data:
+        before = float(data["recording.step_seconds"]), float(data["recording.wall_seconds"])
+    assert 0 < before[0] <= before[1]
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(tmp_path / "x.checkpoint.npz"), "--quiet"]) == 0
+    with np.load(out) as data:
+        step, wall = float(data["step_seconds"]), float(data["wall_seconds"])
+    assert before[0] < step <= wall and before[1] < wall

@@ -123,6 +123,8 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
             recording.capture(frame, simulation)
             bar.update(count)
             if on_frame is not None:
+                # a checkpoint keeps the time so far: a resumed run's wall time includes it
+                recording.wall_seconds = time.perf_counter() - started
                 on_frame(recording, frame)
     recording.wall_seconds = time.perf_counter() - started
     return recording
