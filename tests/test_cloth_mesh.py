@@ -236,9 +236,10 @@ bpy.ops.wm.obj_import(filepath=obj_path)
 modifier = obj.modifiers.new("springsim", "MESH_CACHE")
 modifier.cache_format = "PC2"
 modifier.filepath = cache_path
+modifier.frame_start = 1     # springsim's export numbers its first frame 1
 result = {}
 for frame in map(int, frames):
-    bpy.context.scene.frame_set(frame)
+    bpy.context.scene.frame_set(frame + 1)
     evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
     mesh = evaluated.to_mesh()
     result[frame] = [list(evaluated.matrix_world @ v.co) for v in mesh.vertices]
@@ -265,7 +266,7 @@ def test_the_point_cache_applies_to_the_artists_own_file_in_blender(tmp_path):
     assert main(["export", "--quiet", str(npz), str(tmp_path / "take.pc2")]) == 0
     script = tmp_path / "check.py"
     script.write_text(BLENDER_SCRIPT)
-    frames = [0, recording.frame_count - 1]    # Blender's frame f is the recording's frame f
+    frames = [0, recording.frame_count - 1]    # Blender's frame f + 1 is the recording's frame f
     done = subprocess.run([sys.executable, str(script), str(path), str(tmp_path / "take.pc2"),
                            *map(str, frames)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]

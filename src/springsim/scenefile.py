@@ -72,12 +72,20 @@ def load_scene(name_or_path, overrides=()) -> Scene:
 
 
 def read_scene_file(path: Path) -> Scene:
+    from .export.take import is_recording_file
+
+    require(not is_recording_file(path), "scene", str(path),
+            "is a recording (an NPZ file), not a scene file; `springsim render`, `export` and "
+            "`play` read recordings")
     try:
         table = tomllib.loads(read_text_safely(path))
     except FileNotFoundError:
         raise SceneError("scene", str(path), "no such file; give a .toml scene file or one of "
                          + ", ".join(PRESETS)) from None
-    except (OSError, UnicodeDecodeError) as error:
+    except UnicodeDecodeError:
+        raise SceneError("scene", str(path), "is neither a scene file (it is not UTF-8 text) nor "
+                         "a recording (it is not an NPZ file)") from None
+    except OSError as error:
         raise SceneError("scene", str(path), f"cannot be read ({error})") from None
     except tomllib.TOMLDecodeError as error:
         raise SceneError("scene", str(path), f"is not valid TOML: {error}") from None
