@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError, require
+from .file_kinds import is_recording_file
 from .presets import PRESETS, preset
 from .scene import Scene
 from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
@@ -72,8 +73,6 @@ def load_scene(name_or_path, overrides=()) -> Scene:
 
 
 def read_scene_file(path: Path) -> Scene:
-    from .export.take import is_recording_file
-
     require(not is_recording_file(path), "scene", str(path),
             "is a recording (an NPZ file), not a scene file; `springsim render`, `export` and "
             "`play` read recordings")

@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import SceneError, require
+from ..file_kinds import NPZ_MAGIC, is_recording_file, names_recording  # noqa: F401
 from ..recording_layout import Layout, read_layout
 
 REQUIRED = ("time", "fps", "positions")
-NPZ_MAGIC = b"PK\x03\x04"   # an NPZ file is a ZIP archive
 START_FRAME = 1   # an exported take's first frame number: Blender's first frame, Houdini's too
 
 
@@ -73,25 +73,6 @@ def load_take(path, key: str = "recording") -> Take:
         raise SceneError(key, text, f"is not an NPZ file that `springsim run` wrote ({error})"
                          ) from None
     return take_from_arrays(arrays, text, key)
-
-
-def is_recording_file(path) -> bool:
-    """Whether ``path`` is a regular file that begins as an NPZ (ZIP) file does: a recording
-    rather than a scene file, for the commands that take either."""
-    text = os.fspath(path)
-    if not os.path.isfile(text):
-        return False
-    try:
-        with open(text, "rb") as file:
-            return file.read(len(NPZ_MAGIC)) == NPZ_MAGIC
-    except OSError:
-        return False
-
-
-def names_recording(path) -> bool:
-    """Whether a command that takes a scene or a recording should read ``path`` as a recording:
-    it ends in .npz, or it is a file that begins as an NPZ file does."""
-    return os.fspath(path).lower().endswith(".npz") or is_recording_file(path)
 
 
 def resampled(take: Take, fps: float, duration: float | None = None) -> Take:
