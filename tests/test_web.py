@@ -199,3 +199,18 @@ def orange_pixels(picture):
     """Where the cube's lit faces are: orange pixels."""
     r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
     return (r > 150) & (r - b > 60) & (g > b)
+
+
+def test_the_energy_chart_counts_seconds_and_has_room_for_its_labels(take_path):
+    """uPlot reads an x series as dates unless its scale says otherwise (the chart showed
+    "1/1/70 12:00am"); the energy axis is wide enough for "-200,000" (it showed "0,000")."""
+    from springsim.replay.web import ENERGY_AXIS_WIDTH, WebReplay
+
+    replay = WebReplay(load_take(take_path), port=free_port())
+    try:
+        plot = replay.energy_plot
+        assert plot.scales["x"]["time"] is False
+        x_axis, y_axis = plot.axes
+        assert x_axis["label"] == "t (s)" and y_axis["size"] == ENERGY_AXIS_WIDTH >= 80
+    finally:
+        replay.stop()

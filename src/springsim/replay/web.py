@@ -28,6 +28,9 @@ def rgb(color) -> tuple:
     return tuple(int(round(255 * c)) for c in color)
 
 
+ENERGY_AXIS_WIDTH = 80   # px: room for "-200,000" in the chart's font
+
+
 class WebReplay:
     def __init__(self, take, *, host: str = "127.0.0.1", port: int = 8080, speed: float = 1.0,
                  loop: bool = True):
@@ -141,9 +144,13 @@ class WebReplay:
         series = [uplot.Series(label="t (s)")] + [
             uplot.Series(label=name, stroke=color, width=2) for name, color in
             zip(energies, ("#e07020", "#3070e0", "#30a040", "#202020"))]
+        # uPlot reads x as a date unless told otherwise ("1/1/70 12:00am"); the y axis is made
+        # wide enough for a five-digit energy with its thousands separator ("20,000")
         with self.server.gui.add_folder("Energy (J)"):
-            self.server.gui.add_uplot((np.asarray(self.take.time, float), *energies.values()),
-                                      tuple(series), aspect=1.6)
+            self.energy_plot = self.server.gui.add_uplot(
+                (np.asarray(self.take.time, float), *energies.values()),
+                tuple(series), aspect=1.6, scales={"x": uplot.Scale(time=False)},
+                axes=(uplot.Axis(label="t (s)"), uplot.Axis(label="J", size=ENERGY_AXIS_WIDTH)))
 
     # --- playing ------------------------------------------------------------------------------
     def _toggle(self) -> None:
