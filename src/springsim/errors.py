@@ -32,14 +32,15 @@ class SimulationDiverged(RuntimeError):
     """The state blew up (NaN, infinity or a speed above the course framework's limit)."""
 
     def __init__(self, *, time: float, step: int, integrator: str, dt: float, particle: int,
-                 position, speed_squared: float):
+                 position, speed_squared: float, suggested_dt: float | None = None):
         self.time, self.step, self.integrator, self.dt = time, step, integrator, dt
         self.particle, self.position, self.speed_squared = particle, position, speed_squared
         where = "(" + ", ".join(f"{c:.3g}" for c in position) + ")"
         super().__init__(
             f"simulation diverged at t = {time:.6g} s (step {step}) with integrator "
             f"'{integrator}' and dt = {dt:g} s: particle {particle} near {where} has |v|^2 = "
-            f"{speed_squared:.3g} (limit 1e6). Try a smaller dt (for example {dt / 2:g}), "
+            f"{speed_squared:.3g} (limit 1e6). Try a smaller dt (for example "
+            f"{suggested_dt if suggested_dt is not None else dt / 2:.2g}), "
             f"{_more_stable(integrator)}, or softer springs.")
 
 

@@ -59,17 +59,43 @@ MAX_SCENE_BYTES = 16 * 2 ** 20   # a scene file is a few kB; 16 MB leaves room f
 def load_scene(name_or_path, overrides=()) -> Scene:
     """A built-in scene or a TOML scene file, with ``"dotted.key=value"`` overrides, validated."""
     text = str(name_or_path)
+    names_step = True
     if text in PRESETS:
         scene = preset(text)
     elif text.endswith(".toml") or Path(text).is_file():
-        scene = read_scene_file(Path(text))
+        scene, names_step = read_scene_file(Path(text)), _names_step(Path(text))
     else:
         raise SceneError("scene", text, "must be a .toml scene file or one of "
                          + ", ".join(PRESETS))
     for override in overrides:
         scene = apply_override(scene, override)
+        names_step |= str(override).partition("=")[0].strip() == "dt"
     scene.validate()
+    if not names_step:
+        scene = with_automatic_step(scene)
     return scene
+
+
+def _names_step(path: Path) -> bool:
+    """Whether the scene file gives its own ``dt``."""
+    return "dt" in tomllib.loads(read_text_safely(path))
+
+
+def with_automatic_step(scene: Scene) -> Scene:
+    """``scene`` with the step step_size.py chooses, said in one line (a warning, which the
+    command line prints as one line)."""
+    import warnings
+
+    from .step_size import automatic_step
+
+    estimate = automatic_step(scene)
+    warnings.warn(f"the scene gives no dt: dt = {estimate.dt:.3g} s, from {estimate.basis}",
+                  AutomaticStep, stacklevel=3)
+    return dataclasses.replace(scene, dt=estimate.dt)
+
+
+class AutomaticStep(UserWarning):
+    """A scene file named no dt, and one was chosen (step_size.py)."""
 
 
 def read_scene_file(path: Path) -> Scene:

@@ -132,7 +132,16 @@ class Simulation:
             raise SimulationDiverged(
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
                 dt=dt, particle=particle, position=self.state.positions[particle],
-                speed_squared=speed_squared)
+                speed_squared=speed_squared, suggested_dt=self._step_to_try(dt))
+
+    def _step_to_try(self, dt: float) -> float:
+        """A step to suggest after a divergence: half this one, or less where the stiffest
+        particle's bound says so (step_size.py; the explicit methods')."""
+        from .step_size import IMPLICIT, stable_step
+
+        if self.integrator.name in IMPLICIT:
+            return dt / 2
+        return min(dt / 2, stable_step(self.model, self.integrator.name).dt)
 
     def _surface_shapes(self) -> tuple[int, int]:
         """How many surface triangles and edges the model has (the pair lists number them)."""
