@@ -27,8 +27,11 @@ from .physics import Physical
 
 # the model arrays that the adjoint covers (Physical) and that a SceneValue may change
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
-           "spring_runs", "run_rest_length", "loose_springs"}
+           "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
+           "terrain_restitution"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
+# Physical's fields with a cotangent (physics.Cotangents), which a SceneValue's tangents cover
+DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution")
 
 
 def parameter(scene, name):
@@ -94,16 +97,15 @@ class SceneValue:
                 built.append(changed)
             span = taken[0] - taken[1]   # the step the values took, rounding included
             plus, minus = Physical.of(built[0]), Physical.of(built[1])
-            out.append(((plus.ks - minus.ks) / span, (plus.kd - minus.kd) / span,
-                        (plus.rest - minus.rest) / span, (plus.mass - minus.mass) / span,
-                        (plus.drag - minus.drag) / span, (plus.gravity - minus.gravity) / span,
-                        (built[0].initial_positions - built[1].initial_positions) / span,
-                        (built[0].initial_velocities - built[1].initial_velocities) / span))
+            out.append(tuple((getattr(plus, name) - getattr(minus, name)) / span
+                             for name in DIFFERENTIABLE)
+                       + ((built[0].initial_positions - built[1].initial_positions) / span,
+                          (built[0].initial_velocities - built[1].initial_velocities) / span))
         return out
 
     def gradient(self, scene, model, result):
-        bars = (result.bar.ks, result.bar.kd, result.bar.rest, result.bar.mass, result.bar.drag,
-                result.bar.gravity, result.x0_bar, result.v0_bar)
+        bars = tuple(getattr(result.bar, name) for name in DIFFERENTIABLE) + (result.x0_bar,
+                                                                               result.v0_bar)
         grad = [sum(float(np.sum(b * t)) for b, t in zip(bars, tangent))
                 for tangent in self.tangents(scene, model)]
         return float(grad[0]) if self.shape == () else np.array(grad).reshape(self.shape)

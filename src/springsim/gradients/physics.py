@@ -20,6 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .contact import Planes, contact_accelerations, contact_accelerations_vjp
+
 
 class Physical(NamedTuple):
     """The differentiable numbers of a model, one per spring or particle."""
@@ -33,6 +35,9 @@ class Physical(NamedTuple):
     free: np.ndarray      # (P,) bool: not pinned
     a: np.ndarray         # (S,) the springs' first particles
     b: np.ndarray         # (S,) and second
+    friction: np.ndarray      # (T,) the terrains' Coulomb friction
+    restitution: np.ndarray   # (T,) and restitution
+    planes: Planes            # the terrains as contact needs them (contact.py)
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -42,7 +47,9 @@ class Physical(NamedTuple):
                    arrays.rest_length.astype(float), model.mass.astype(float),
                    arrays.drag.astype(float), arrays.gravity.astype(float),
                    arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
-                   arrays.springs[:, 1].astype(np.int64))
+                   arrays.springs[:, 1].astype(np.int64),
+                   arrays.terrain_friction.astype(float),
+                   arrays.terrain_restitution.astype(float), Planes.of(model))
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -65,6 +72,8 @@ class Cotangents:
     mass: np.ndarray
     drag: np.ndarray
     gravity: np.ndarray
+    friction: np.ndarray
+    restitution: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
@@ -160,6 +169,23 @@ def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents
     bar.drag -= w * dot(g, v)
     v_bar -= (w * physical.drag)[:, None] * g
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+
+
+def step_accelerations(physical: Physical, x, v, h):
+    """(dv/dt with terrain contact, what contact did): forces.accelerations at step h."""
+    a = accelerations(physical, x, v)
+    if not len(physical.friction):
+        return a, []
+    return contact_accelerations(physical, x, v, h, a)
+
+
+def step_accelerations_vjp(physical: Physical, x, v, h, touches, g, x_bar, v_bar,
+                           bar: Cotangents) -> None:
+    """Add g . d(step_accelerations)/d(everything) into x_bar, v_bar and bar; ``touches`` is
+    what step_accelerations returned second for the same (x, v)."""
+    if touches:
+        g = contact_accelerations_vjp(physical, h, touches, g, v_bar, bar)
+    accelerations_vjp(physical, x, v, g, x_bar, v_bar, bar)
 
 
 # --- the implicit system (implicit/jacobian.py) -------------------------------------------------
