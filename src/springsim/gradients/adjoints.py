@@ -14,6 +14,7 @@ import numpy as np
 
 from .contact import impacts, impacts_vjp
 from .physics import step_accelerations, step_accelerations_vjp
+from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import newton_estimates, system_vjp_iteration
 
 ADJOINTS: dict[str, type] = {}
@@ -140,10 +141,19 @@ class ImplicitEulerAdjoint(Adjoint):
     the simulation computed (v' - v - dv_{K-1}); earlier ones are solved again here, tightly."""
 
     name = "implicit_euler"
+    carried_bar = None   # the cotangent of the friction dampers carried into the step after
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
+        x, v = start[0], start[1]
         iterations = self.integrator.newton_iterations
+        if len(start) == 3 and touches_planes(physical, h, start, end):
+            kind, terrain, dampers = start[2]
+            carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
+            _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
+            x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,
+                                                             v_bar, carried, bar)
+            return x_bar, v_bar
+        self.carried_bar = None   # a step without contacts leaves no damper behind
         estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations,
                                      self.integrator.cg_tolerance)
         dv_bar = v_bar + h * x_bar

@@ -73,6 +73,36 @@ def solve_free(physical, matrix, rhs):
     return u.reshape(rhs.shape)
 
 
+def solve_reduced(matrix, rhs, held, basis):
+    """u with Q^T (A u - rhs) = 0 and u = Q w + held: the components ``basis`` (Q, orthonormal
+    columns) spans solved, the others held (gradients/implicit_contact.py's constraints)."""
+    reduced = (basis.T @ matrix @ basis).tocsc()
+    b = basis.T @ (rhs.ravel() - matrix @ held.ravel())
+    if not b.any():
+        return held.copy()
+    if b.size <= DIRECT_LIMIT:
+        w = linalg.spsolve(reduced, b)
+    else:
+        diagonal = reduced.diagonal()
+        preconditioner = linalg.LinearOperator(reduced.shape, matvec=lambda r: r / diagonal)
+        w, _ = linalg.cg(reduced, b, rtol=ADJOINT_TOLERANCE, atol=0.0, maxiter=10 * b.size,
+                         M=preconditioner)
+    return (basis @ w).reshape(held.shape) + held
+
+
+def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar):
+    """Add lam . d(newton_rhs)/d(x, v, x_k, v_k, parameters), its -M dv term aside (the
+    caller's: it also takes dv's cotangent)."""
+    spring_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
+    free = physical.free
+    bar.gravity += h * (physical.mass[free, None] * lam[free]).sum(axis=0)
+    bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
+    bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
+    vk_bar -= h * physical.drag[:, None] * lam
+    if first:
+        stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
+
+
 def estimate(x, v, dv, h, first):
     """The Newton estimate (x_k, v_k): (x, v) in the first iteration, else x + h (v + dv)."""
     if first:
@@ -113,15 +143,8 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     ddv = dv_next - dv
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
     # r_k's share
-    spring_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
-    free = physical.free
-    bar.gravity += h * (physical.mass[free, None] * lam[free]).sum(axis=0)
-    bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
-    bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
-    vk_bar -= h * physical.drag[:, None] * lam
+    rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar)
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
-    if first:
-        stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
     x_bar += xk_bar
