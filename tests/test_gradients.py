@@ -153,9 +153,70 @@ def test_nan_loss_and_untouched_terrain():
     _, grads = gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4",
                             dt=0.002)
     assert np.isfinite(grads["drag"])
-    scene.terrains = [Plane(point=(0.0, 1.48, 0.0))]  # reached within 0.1 s of falling
-    with pytest.raises(SceneError, match="terrain contact"):
+    from springsim.terrains.sphere import Sphere
+    scene.terrains = [Sphere(center=(0.0, -1.52, 0.0), radius=3.0)]  # reached within 0.1 s
+    with pytest.raises(SceneError, match="contact with planes only"):
         gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4", dt=0.002)
+
+
+# --- terrain contact ----------------------------------------------------------------------------
+
+SLOPE = 0.1   # the plane's rise per metre: the cube slides where friction < SLOPE
+CONTACT_CASES = {   # (friction, the cube's height, its velocity)
+    "lands and slides": (0.05, 0.53, (0.3, -1.5, 0.0)),   # lands at 1.5 m/s: bounces (e = 0.5)
+    "rests": (0.3, 0.504, (0.0, -0.01, 0.0)),             # held by static friction
+}
+CONTACT_KEYS = ["bodies.0.structural.ks", "terrains.0.friction", "terrains.0.restitution",
+                "bodies.0.velocity"]
+
+
+def tilted_scene(case):
+    """A 3 x 3 x 3 cube turned to lie flat on a plane tilted by SLOPE, its bottom face in the
+    contact band or just above it."""
+    from springsim.terrains.plane import Plane
+    friction, height, velocity = CONTACT_CASES[case]
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.0, height, 0.0),
+                velocity=velocity, rotation_degrees=-float(np.degrees(np.arctan(SLOPE))),
+                rotation_axis=(0.0, 0.0, 1.0))
+    return Scene(bodies=[cube], terrains=[Plane(point=(0.0, 0.0, 0.0), normal=(SLOPE, 1.0, 0.0),
+                                                friction=friction, restitution=0.5)], drag=0.1)
+
+
+def forward_loss(scene, integrator, steps, name, value):
+    """The loss of the forward run alone, with parameter ``name`` set to ``value``."""
+    from springsim.gradients.tape import record
+    dt = STEPS[integrator]
+    scene, simulation, _ = prepare(scene, [name], {name: value}, integrator=integrator, dt=dt,
+                                   **TIGHT.get(integrator, {}))
+    loss = as_loss(weighted_squares, 1 / (4 * dt))
+    frame_steps = loss.frame_steps(steps * dt, dt, simulation.model.particle_count)
+    frames, _ = record(simulation, steps, frame_steps, 1 << 30)
+    return loss(frames)[0]
+
+
+@pytest.mark.parametrize("case", list(CONTACT_CASES))
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_terrain_contact_matches_finite_differences(integrator, case):
+    """Resting, landing (a bounce with restitution) and sliding on a tilted plane: the motion
+    is smooth in these parameters (no particle changes branch within the differences)."""
+    from springsim.gradients.parameters import parameter
+    scene = tilted_scene(case)
+    dt, steps = STEPS[integrator], 15
+    _, grads = gradient(scene, weighted_squares, CONTACT_KEYS, duration=steps * dt,
+                        integrator=integrator, dt=dt, fps=1 / (4 * dt),
+                        **TIGHT.get(integrator, {}))
+    for name in CONTACT_KEYS:
+        base = parameter(scene, name).value
+        for j in range(base.size):
+            step = 1e-5 * max(abs(base.ravel()[j]), 1.0)
+            values = []
+            for sign in (1.0, -1.0):
+                value = np.array(base, float)
+                value.ravel()[j] += sign * step
+                values.append(forward_loss(scene, integrator, steps, name, value))
+            expected = (values[0] - values[1]) / (2 * step)
+            assert np.ravel(grads[name])[j] == pytest.approx(expected, rel=1e-5, abs=1e-7), \
+                (name, j)
 
 
 def test_fit_command_recovers_stiffness(tmp_path, capsys):

@@ -228,12 +228,11 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
         b_sp = newton_rhs(physical, h, x, v, dv, first)
         u0 = v + dv
         blocks = diagonal_blocks(physical, x_k, h)
-        cap = (np.empty(0, np.int64),) * 1 + (np.empty(0),) * 4
-        if first:
-            cap = capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c)
+        cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
+        if first:   # remembered_friction_in_cone
+            *cap, lowered = capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c)
             c = c.copy()
-            c[cap[0]] = cap[5]
-            cap = cap[:5]
+            c[cap[0]] = lowered
         c_start = c.copy()
         steps = []
         ddv = solve_step(physical, constraints, kind, matrix, b_sp, u0, c)
@@ -419,7 +418,6 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
                       out_v, bar):
     """One Newton iteration backwards (module doc); returns the cotangents of its starting dv
     and dampers."""
-    normal = constraints.normal
     first, dv = it.first, it.dv
     x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
     u0 = v + dv
