@@ -409,8 +409,8 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
         dv_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar,
                                           floor_bar, out_x, out_v, bar)
     c_memory_bar = np.where(record.continues, c_bar, 0.0)
-    floor_vjp(physical, constraints, np.nonzero(constraints.kind == CONTACT)[0], floor_bar, h,
-              out_x, out_v)
+    # every particle that was a contact at some solve (made or released within the step too)
+    floor_vjp(physical, constraints, np.nonzero(floor_bar)[0], floor_bar, h, out_x, out_v)
     return out_x, out_v, c_memory_bar
 
 
