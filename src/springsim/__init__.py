@@ -10,13 +10,24 @@ from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
 from .errors import SceneError, SimulationDiverged
-from .gradients import gradient
 from .integrators import integrator_names
 from .presets import preset_names
 from .scene import Scene
 from .scenefile import load_scene
 from .simulation import Simulation
 from .sweeps import sweep
+
+
+
+def __getattr__(name):
+    """``springsim.gradient`` (springsim.gradients.gradient), imported on first use: a plain run
+    does not need the adjoint's modules."""
+    if name == "gradient":
+        from .gradients import gradient
+
+        return gradient
+    raise AttributeError(f"module 'springsim' has no attribute {name!r}")
+
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
