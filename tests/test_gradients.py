@@ -262,3 +262,44 @@ def test_implicit_gradient_is_of_what_was_computed(scene_of):
         for name in keys:
             error = np.max(np.abs(np.ravel(loose[name]) - np.ravel(tight[name])))
             assert error <= 10 * tolerance * np.max(np.abs(tight[name])), (name, tolerance)
+
+
+def test_kernels_match_their_numpy_references():
+    """gradients/kernels.py against physics.py's NumPy VJPs, on random springs: some stretched,
+    some compressed (the clamped stiffness), one of zero length."""
+    from springsim.gradients import physics
+    from springsim.gradients.contact import Planes
+    rng = np.random.default_rng(3)
+    count, springs = 12, 30
+    pairs = np.array([rng.choice(count, 2, replace=False) for _ in range(springs)])
+    x, v, u, g = (rng.normal(size=(count, 3)) for _ in range(4))
+    x[pairs[0, 1]] = x[pairs[0, 0]]   # a spring of zero length
+    free = np.ones(count, bool)
+    free[0] = False
+    physical = physics.Physical(rng.uniform(1, 3, springs), rng.uniform(0.1, 1, springs),
+                                rng.uniform(0.5, 2, springs), rng.uniform(1, 2, count),
+                                rng.uniform(0, 1, count), np.array([0.0, -9.8, 0.0]), free,
+                                pairs[:, 0].copy(), pairs[:, 1].copy(), np.empty(0),
+                                np.empty(0), Planes(*(np.empty((0, 3)),) * 2,
+                                                    *(np.empty(0),) * 4))
+    h = 0.01
+    calls = [
+        lambda f, xb, ub, bar: f["spring_forces_vjp"](physical, x, v, g, xb, ub, bar),
+        lambda f, xb, ub, bar: f["stiffness_product_vjp"](physical, x, u, g, xb, ub, bar),
+        lambda f, xb, ub, bar: f["system_product_vjp"](physical, x, u, g, h, xb, bar),
+    ]
+    fast = {name: getattr(physics, name) for name in
+            ("spring_forces_vjp", "stiffness_product_vjp", "system_product_vjp")}
+    slow = {name: getattr(physics, "reference_" + name) for name in fast}
+    for call in calls:
+        results = []
+        for functions in (fast, slow):
+            bar = physics.Cotangents.zeros(physical)
+            xb, ub = np.zeros((count, 3)), np.zeros((count, 3))
+            call(functions, xb, ub, bar)
+            results.append((xb, ub, bar.ks, bar.kd, bar.rest, bar.mass, bar.drag))
+        for got, expected in zip(*results):
+            np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(physics.stiffness_product(physical, x, u),
+                               physics.reference_stiffness_product(physical, x, u),
+                               rtol=1e-12, atol=1e-12)

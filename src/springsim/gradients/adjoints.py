@@ -12,10 +12,11 @@ in NumPy from the step's start to know what it did.
 """
 import numpy as np
 
-from .contact import impacts, impacts_vjp
+from .contact import far_from_planes, impacts, impacts_vjp
+from .kernels import rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
-from .solve import newton_estimates, system_vjp_iteration
+from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 
 ADJOINTS: dict[str, type] = {}
 
@@ -28,8 +29,9 @@ def register_adjoint(cls):
 class Adjoint:
     name = ""
 
-    def __init__(self, integrator):
+    def __init__(self, integrator, model):
         self.integrator = integrator
+        self.model = model
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         raise NotImplementedError   # every registered adjoint overrides this
@@ -92,6 +94,20 @@ class RK4Adjoint(ExplicitAdjoint):
     contact is at the whole step h, as the forward's."""
 
     name = "rk4"
+    work = None
+
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+        if not far_from_planes(physical, h, start, end):
+            return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
+        x, v = start[0], start[1]
+        if self.work is None or self.work.shape[1] != len(x):
+            self.work = np.empty((17, len(x), 3))
+        x_bar, v_bar = x_bar.copy(), v_bar.copy()
+        rk4_step_vjp((physical.a, physical.b, physical.ks, physical.kd, physical.rest),
+                     (physical.inv_mass, physical.drag, physical.gravity), h, x, v, x_bar,
+                     v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity),
+                     self.work)
+        return x_bar, v_bar
 
     def update(self, physical, h, x, v):
         a1, t1 = step_accelerations(physical, x, v, h)
@@ -142,6 +158,7 @@ class ImplicitEulerAdjoint(Adjoint):
 
     name = "implicit_euler"
     carried_bar = None   # the cotangent of the friction dampers carried into the step after
+    solver = None        # solve.ForwardSolver, made on first use
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         x, v = start[0], start[1]
@@ -154,11 +171,12 @@ class ImplicitEulerAdjoint(Adjoint):
                                                              v_bar, carried, bar)
             return x_bar, v_bar
         self.carried_bar = None   # a step without contacts leaves no damper behind
-        estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations,
-                                     self.integrator.cg_tolerance)
+        if self.solver is None:
+            self.solver = ForwardSolver(self.model, self.integrator)
+        estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations, self.solver)
         dv_bar = v_bar + h * x_bar
         x_bar, v_bar = x_bar.copy(), dv_bar.copy()
         for k in reversed(range(iterations)):
             dv_bar = system_vjp_iteration(physical, h, x, v, estimates[k], estimates[k + 1],
-                                          k == 0, dv_bar, x_bar, v_bar, bar)
+                                          k == 0, dv_bar, x_bar, v_bar, bar, self.solver)
         return x_bar, v_bar

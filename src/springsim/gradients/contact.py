@@ -68,6 +68,24 @@ def along(u: np.ndarray, n: np.ndarray) -> np.ndarray:
     return u[:, 0] * n[0] + u[:, 1] * n[1] + u[:, 2] * n[2]
 
 
+def far_from_planes(physical, h, start, end) -> bool:
+    """Whether no stage of a step can have touched a plane: every free particle starts and ends
+    it farther from each plane than the band and twice the distance its fastest particle
+    covers in a step (an explicit step's stages stay within h |v| of its start, near enough).
+    The adjoint then skips contact (kernels.rk4_step_vjp)."""
+    planes = physical.planes
+    if not planes.is_plane.any():
+        return True
+    (x, v), (x_end, v_end) = start[:2], end[:2]
+    speed = max(np.sqrt(np.max(np.einsum("ij,ij->i", v, v))),
+                np.sqrt(np.max(np.einsum("ij,ij->i", v_end, v_end))))
+    for t in np.nonzero(planes.is_plane)[0]:
+        near = np.minimum(plane_distance(planes, t, x), plane_distance(planes, t, x_end))
+        if np.any(physical.free & (near < planes.epsilon[t] + 2.0 * h * speed)):
+            return False
+    return True
+
+
 # --- the reaction and friction inside each force evaluation --------------------------------------
 
 STICK, KINETIC, SLOWING = 0, 1, 2

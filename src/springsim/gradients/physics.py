@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import kernels
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
 
 
@@ -130,7 +131,8 @@ def spring_forces(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarra
     return force
 
 
-def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+def reference_spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar,
+                                bar: Cotangents) -> None:
     """Add g . d(spring_forces)/d(x, v, ks, kd, r) into x_bar, v_bar and bar."""
     springs = geometry(physical, x)
     l, length = springs.unit, springs.length
@@ -200,7 +202,8 @@ def stiffness_coefficients(physical: Physical, springs: Springs):
             np.where(stretched, -physical.ks * springs.inverse, 0.0), ratio)
 
 
-def stiffness_product(physical: Physical, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+def reference_stiffness_product(physical: Physical, x: np.ndarray,
+                                u: np.ndarray) -> np.ndarray:
     """(dF/dx) u at x, clamped as the matrix is (jacobian.add_stiffness_product)."""
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -212,7 +215,8 @@ def stiffness_product(physical: Physical, x: np.ndarray, u: np.ndarray) -> np.nd
     return out
 
 
-def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
+def reference_stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar,
+                                    bar: Cotangents) -> None:
     """Add g . d[(dF/dx)(x) u]/d(x, u, ks, r) into x_bar, u_bar and bar."""
     springs = geometry(physical, x)
     along, across, across_dl, across_dr, ratio = stiffness_coefficients(physical, springs)
@@ -221,7 +225,8 @@ def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotang
     lu, lg = dot(l, us), dot(l, gs)
     # out_a = -(ks P(u) + across (u - P(u))), P(u) = (l . u) l
     sideways = dot(gs, us) - lu * lg    # g . (u - P(u))
-    d_bar = -(along[:, None] * projection_vjp(springs, us, gs) + (across_dl * sideways)[:, None] * l)
+    d_bar = -(along[:, None] * projection_vjp(springs, us, gs)
+              + (across_dl * sideways)[:, None] * l)
     scatter(physical, d_bar, x_bar)
     scatter(physical, -(physical.ks * lg)[:, None] * l - across[:, None] * (gs - lg[:, None] * l),
             u_bar)
@@ -243,7 +248,8 @@ def system_product(physical: Physical, x: np.ndarray, u: np.ndarray, h: float) -
     return out
 
 
-def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
+def reference_system_product_vjp(physical: Physical, x, u, g, h, x_bar,
+                                 bar: Cotangents) -> None:
     """Add g . d(A(x) u)/d(x, ks, kd, r, mass, drag), u held fixed, into x_bar and bar."""
     bar.mass += np.where(physical.free, dot(g, u), 0.0)
     bar.drag += h * dot(g, u)
@@ -257,3 +263,38 @@ def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -
     stiffness_product_vjp(physical, x, u, -h * h * g, x_bar, u_scratch, bar)
     d_bar = h * physical.kd[:, None] * projection_vjp(springs, us, gs)
     scatter(physical, d_bar, x_bar)
+
+
+# --- the same through the kernels (kernels.py): what the adjoints call --------------------------
+
+def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+    """reference_spring_forces_vjp, in a kernel."""
+    kernels.add_spring_forces_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                  physical.rest, x, v, np.ascontiguousarray(g), x_bar, v_bar,
+                                  bar.ks, bar.kd, bar.rest)
+
+
+def stiffness_product(physical: Physical, x, u) -> np.ndarray:
+    """reference_stiffness_product, in a kernel."""
+    out = np.zeros_like(x)
+    kernels.add_stiffness_product(physical.a, physical.b, physical.ks, physical.rest, x,
+                                  np.ascontiguousarray(u), 1.0, out)
+    return out
+
+
+def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
+    """reference_stiffness_product_vjp, in a kernel."""
+    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                   physical.rest, x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), 0.0, 1.0, 0.0, x_bar, u_bar, bar.ks,
+                                   bar.kd, bar.rest)
+
+
+def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
+    """reference_system_product_vjp, the springs in a kernel."""
+    bar.mass += np.where(physical.free, dot(g, u), 0.0)
+    bar.drag += h * dot(g, u)
+    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                   physical.rest, x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), h, -h * h, h, x_bar,
+                                   np.empty((0, 3)), bar.ks, bar.kd, bar.rest)

@@ -1,0 +1,101 @@
+"""Issue 32's fitting bars: ``fit`` recovers parameters from a noisy take of the scene itself.
+
+    .venv/bin/python benchmarks/fits.py cloth [--size 10]
+    .venv/bin/python benchmarks/fits.py cube
+
+``cloth``: cloth-hang (SIZE x SIZE particles, self-collision off) under implicit_euler at
+dt = 0.01 s; a 2 s take at 50 fps with 0.5 mm of Gaussian noise (seed 0) added to every
+coordinate; the structural ks and kd fitted from half and from twice their true values
+(25000 N/m, 750 N s/m). Bar: within 1% (issue 32).
+
+``cube``: a 4 x 4 x 4 jelly cube (edge 1 m, soft: ks = 400 N/m, kd = 4 N s/m, so that its
+bounce depends on them) dropped onto the tilted plane (friction 1.2, above the slope of 1)
+under rk4 at dt = 2e-3 s: it lands, slides and comes to rest within the 2 s take (0.5 mm
+noise); the structural ks and kd fitted from half and twice (the other kinds at their true values). The default cube (10 x 10
+x 10, rk4 at 1e-3 s over the seconds it takes to come to rest) is the issue's bar; this smaller
+one runs in minutes.
+
+Prints a line per start: the fitted values, their errors, iterations and time.
+"""
+import argparse
+import time
+
+import numpy as np
+
+import springsim
+from springsim.gradients.fit import fit
+from springsim.gradients.losses import ObservedTake
+
+NOISE = 0.5e-3   # m
+
+
+def take(scene, options, duration, fps, seed=0):
+    """The scene's own motion at ``fps``, with NOISE added: an ObservedTake."""
+    simulation = springsim.Simulation(scene, **options)
+    steps_per_frame = round(1 / (fps * simulation.dt))
+    times, frames = [0.0], [simulation.positions.copy()]
+    for _ in range(round(duration * fps)):
+        simulation.step(steps_per_frame)
+        times.append(simulation.time)
+        frames.append(simulation.positions.copy())
+    positions = np.array(frames)
+    positions += np.random.default_rng(seed).normal(0.0, NOISE, positions.shape)
+    return ObservedTake({"time": np.array(times), "positions": positions})
+
+
+def run_fits(scene, options, duration, truth, set_start):
+    observed = take(scene, options, duration, 50)
+    for factor in (0.5, 2.0):
+        began = time.perf_counter()
+        start = set_start(scene, factor)
+        result = fit(start, observed, list(truth), duration, max_iterations=60, **options)
+        errors = {name: result.values[name] / truth[name] - 1 for name in truth}
+        print(f"from {factor:g} x: " + ", ".join(
+            f"{name} = {float(result.values[name]):.6g} ({100 * errors[name]:+.3f}%)"
+            for name in truth) + f"; {result.iterations} iterations, {result.evaluations} "
+            f"evaluations, {time.perf_counter() - began:.0f} s", flush=True)
+
+
+def cloth(size):
+    scene = springsim.load_scene("cloth-hang", [f"bodies.0.particles_per_edge={size}",
+                                                "bodies.0.self_collision=false"])
+    options = {"integrator": "implicit_euler", "dt": 0.01}
+    truth = {"bodies.0.structural.ks": scene.bodies[0].structural.ks,
+             "bodies.0.structural.kd": scene.bodies[0].structural.kd}
+
+    def set_start(scene, factor):
+        return springsim.load_scene("cloth-hang", [
+            f"bodies.0.particles_per_edge={size}", "bodies.0.self_collision=false",
+            f"bodies.0.structural.ks={truth['bodies.0.structural.ks'] * factor}",
+            f"bodies.0.structural.kd={truth['bodies.0.structural.kd'] * factor}"])
+
+    run_fits(scene, options, 2.0, truth, set_start)
+
+
+def cube():
+    sets = ["bodies.0.particles_per_edge=4", "bodies.0.edge_length=1.0",
+            "bodies.0.position=[0.0,1.3,0.0]", "terrains.0.friction=1.2"]
+    ks, kd = 400.0, 4.0
+    kinds = ("structural", "shear", "bend")
+
+    def scene_with(factor):
+        """Every kind at (ks, kd), the structural springs' times ``factor``."""
+        return springsim.load_scene("jelly-tilted", sets + [
+            f"bodies.0.{kind}.{key}={value * (factor if kind == 'structural' else 1.0)}"
+            for kind in kinds for key, value in (("ks", ks), ("kd", kd))])
+
+    options = {"integrator": "rk4", "dt": 2e-3}
+    truth = {"bodies.0.structural.ks": ks, "bodies.0.structural.kd": kd}
+    run_fits(scene_with(1.0), options, 2.0, truth, lambda scene, factor: scene_with(factor))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case", choices=["cloth", "cube"])
+    parser.add_argument("--size", type=int, default=10)
+    args = parser.parse_args()
+    cloth(args.size) if args.case == "cloth" else cube()
+
+
+if __name__ == "__main__":
+    main()
