@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/fits.py cloth [--size 10]
     .venv/bin/python benchmarks/fits.py cube
+    .venv/bin/python benchmarks/fits.py regions [--size 20]
 
 ``cloth``: cloth-hang (SIZE x SIZE particles, self-collision off) under implicit_euler at
 dt = 0.01 s; a 2 s take at 50 fps with 0.5 mm of Gaussian noise (seed 0) added to every
@@ -14,6 +15,11 @@ under rk4 at dt = 2e-3 s: it lands, slides and comes to rest within the 2 s take
 noise); the structural ks and kd fitted from half and twice (the other kinds at their true values). The default cube (10 x 10
 x 10, rk4 at 1e-3 s over the seconds it takes to come to rest) is the issue's bar; this smaller
 one runs in minutes.
+
+``regions``: cloth-hang (SIZE x SIZE, implicit_euler, dt = 0.01 s) whose springs right of
+x = 0 are 4 times as stiff as those left of it (``bodies.0.stiffness_regions.x=0`` = [1, 4]); a
+2 s take of 30 markers (particles chosen at random, seed 0, tied by index) at 50 fps with 0.5 mm
+noise, written as a marker CSV; the two scales fitted from [1, 1]. Bar: within 5% per region.
 
 Prints a line per start: the fitted values, their errors, iterations and time.
 """
@@ -74,7 +80,7 @@ def cloth(size):
 
 def cube():
     sets = ["bodies.0.particles_per_edge=4", "bodies.0.edge_length=1.0",
-            "bodies.0.position=[0.0,1.3,0.0]", "terrains.0.friction=1.2"]
+            "bodies.0.position=[0.5,1.5,0.0]", "terrains.0.friction=1.2"]
     ks, kd = 400.0, 4.0
     kinds = ("structural", "shear", "bend")
 
@@ -89,12 +95,50 @@ def cube():
     run_fits(scene_with(1.0), options, 2.0, truth, lambda scene, factor: scene_with(factor))
 
 
+def regions(size):
+    import tempfile
+    from pathlib import Path
+
+    from springsim.gradients import prepare
+    from springsim.gradients.losses import MarkerTracks
+
+    scene = springsim.load_scene("cloth-hang", [f"bodies.0.particles_per_edge={size}",
+                                                "bodies.0.self_collision=false"])
+    options = {"integrator": "implicit_euler", "dt": 0.01}
+    name, truth = "bodies.0.stiffness_regions.x=0", np.array([1.0, 4.0])
+    _, simulation, _ = prepare(scene, [name], {name: truth}, **options)
+    rng = np.random.default_rng(0)
+    markers = rng.choice(np.flatnonzero(~simulation.model.pinned), 30, replace=False)
+    rows = ["time,marker,x,y,z"]
+    for frame in range(101):   # 2 s at 50 fps
+        if frame:
+            simulation.step(2)
+        noisy = simulation.positions[markers] + rng.normal(0.0, NOISE, (30, 3))
+        rows += [f"{simulation.time!r},{m},{p[0]!r},{p[1]!r},{p[2]!r}"
+                 for m, p in zip(markers, noisy)]
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "markers.csv"
+        path.write_text("\n".join(rows) + "\n")
+        observed = MarkerTracks(path, match="index")
+        began = time.perf_counter()
+        result = fit(scene, observed, [name], 2.0, max_iterations=60, **options)
+    fitted = np.asarray(result.values[name])
+    print(f"from [1, 1]: {name} = {fitted.round(5).tolist()} (errors "
+          f"{(100 * (fitted / truth - 1)).round(3).tolist()}%); {result.iterations} iterations, "
+          f"{result.evaluations} evaluations, {time.perf_counter() - began:.0f} s", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("case", choices=["cloth", "cube"])
+    parser.add_argument("case", choices=["cloth", "cube", "regions"])
     parser.add_argument("--size", type=int, default=10)
     args = parser.parse_args()
-    cloth(args.size) if args.case == "cloth" else cube()
+    if args.case == "cloth":
+        cloth(args.size)
+    elif args.case == "cube":
+        cube()
+    else:
+        regions(args.size if args.size != 10 else 20)
 
 
 if __name__ == "__main__":

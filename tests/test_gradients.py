@@ -303,3 +303,22 @@ def test_kernels_match_their_numpy_references():
     np.testing.assert_allclose(physics.stiffness_product(physical, x, u),
                                physics.reference_stiffness_product(physical, x, u),
                                rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("name, value", [("bodies.0.stiffness_regions.x=0.1", [1.3, 0.7]),
+                                         ("bodies.0.stiffness_field", None)])
+def test_stiffness_scales_away_from_one(name, value):
+    """A stiffness scale's gradient at a scale other than 1 (fit moves it there): two regions
+    cut at x = 0.1, and a random per-spring field."""
+    scene = small_scene()
+    _, simulation, (p,) = prepare(scene, [name], None, integrator="rk4", dt=0.002)
+    if value is None:
+        value = np.random.default_rng(2).uniform(0.5, 2.0, p.read(simulation.model).shape)
+    value = np.asarray(value, float)
+    _, simulation, (p,) = prepare(scene, [name], {name: value}, integrator="rk4", dt=0.002)
+    result = run_gradient(simulation, as_loss(weighted_squares, 125), 0.02)
+    grad = np.ravel(p.gradient(scene, simulation.model, result))
+    for j in (0, value.size - 1):
+        step = 1e-6
+        expected = central_difference(scene, "rk4", name, value, j, step)
+        assert grad[j] == pytest.approx(expected, rel=1e-5, abs=1e-7), j

@@ -33,7 +33,7 @@ class FitResult:
 
 
 def is_positive(name: str) -> bool:
-    return name.split(".")[-1] in POSITIVE_WORDS
+    return name.split(".")[-1] in POSITIVE_WORDS or ".stiffness_regions." in name
 
 
 def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_iterations=50,
