@@ -114,7 +114,7 @@ def regions(size):
         if frame:
             simulation.step(2)
         noisy = simulation.positions[markers] + rng.normal(0.0, NOISE, (30, 3))
-        rows += [f"{simulation.time!r},{m},{p[0]!r},{p[1]!r},{p[2]!r}"
+        rows += [",".join([repr(float(simulation.time)), str(m)] + [repr(float(c)) for c in p])
                  for m, p in zip(markers, noisy)]
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "markers.csv"
