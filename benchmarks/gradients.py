@@ -12,6 +12,10 @@ and the backward pass), alternately, since the machine's speed drifts; it prints
 ratio per repeat, and the range of the ratios. Both are warmed (compiled or loaded from the
 cache) by a short run first.
 
+``kernels``: the cube's parts, each timed over 200 calls, 3 times: the forward rk4 step, the
+adjoint's spring force loop and its VJP (gradients/kernels.py), and one step's adjoint
+(kernels.rk4_step_vjp: four force loops and four VJPs).
+
 ``memory``: the cloth's gradient over ``--duration`` s in a child process; prints the child's
 peak resident memory (ru_maxrss) and the bytes of states the tape held.
 """
@@ -87,9 +91,47 @@ def child(duration: float) -> None:
           f"{result.stored_bytes / 1e9:.2f} GB")
 
 
+def parts() -> None:
+    import springsim
+    from springsim.gradients import kernels
+    from springsim.gradients.physics import Cotangents, Physical
+
+    scene, options = setup("cube")
+    simulation = springsim.Simulation(scene, **options)
+    simulation.advance(0.01)
+    p = Physical.of(simulation.model)
+    x = simulation.positions.copy()
+    v = np.random.default_rng(0).normal(size=x.shape)
+    g = v.copy()
+    bar = Cotangents.zeros(p)
+    x_bar, v_bar, force = np.zeros_like(x), np.zeros_like(x), np.zeros_like(x)
+    work = np.empty((17, len(x), 3))
+    calls = {
+        "forward rk4 step": lambda: simulation.step(1),
+        "force loop": lambda: kernels.add_spring_forces(p.a, p.b, p.ks, p.kd, p.rest, x, v,
+                                                        force),
+        "force VJP": lambda: kernels.add_spring_forces_vjp(p.a, p.b, p.ks, p.kd, p.rest, x, v, g,
+                                                           x_bar, v_bar, bar.ks, bar.kd,
+                                                           bar.rest),
+        "rk4 step adjoint": lambda: kernels.rk4_step_vjp(
+            (p.a, p.b, p.ks, p.kd, p.rest), (p.inv_mass, p.drag, p.gravity), options["dt"], x,
+            v, x_bar, v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work),
+    }
+    print(f"cube: {len(x)} particles, {len(p.a)} springs")
+    for _ in range(3):
+        line = []
+        for name, call in calls.items():
+            call()
+            began = time.perf_counter()
+            for _ in range(200):
+                call()
+            line.append(f"{name} {(time.perf_counter() - began) / 200 * 1e6:.0f} us")
+        print(", ".join(line), flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("case", choices=[*CASES, "memory", "child"])
+    parser.add_argument("case", choices=[*CASES, "kernels", "memory", "child"])
     parser.add_argument("--duration", type=float)
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
@@ -97,6 +139,8 @@ def main() -> None:
         memory(args.duration or 10.0)
     elif args.case == "child":
         child(args.duration)
+    elif args.case == "kernels":
+        parts()
     else:
         timed(args.case, args.duration or 1.0, args.repeats)
 
