@@ -5,8 +5,9 @@ exported files in Blender itself and print, as JSON, where Blender has every ver
 
 For the USD: Blender's frame range, and at each frame the world-space vertices of every imported
 body mesh and the world-space centre of every ball. For each point cache: the OBJ imported with
-Blender's default axes, a Mesh Cache modifier reading the cache, and the world-space vertices at
-each frame. Blender's world is Z up; the test turns springsim's Y-up coordinates into it.
+Blender's default axes, a Mesh Cache modifier reading the cache from Blender frame 1 (its Frame
+Start, as docs/tutorials/blender-houdini.md says to set it), and the world-space vertices at each
+frame. Blender's world is Z up; the test turns springsim's Y-up coordinates into it.
 """
 import json
 import sys
@@ -42,13 +43,15 @@ def usd(path: str, frames: list) -> dict:
     return result
 
 
-def point_cache(obj_path: str, cache_path: str, cache_format: str, frames: list) -> dict:
+def point_cache(obj_path: str, cache_path: str, cache_format: str, frames: list,
+                start: int = 1) -> dict:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.wm.obj_import(filepath=obj_path)
     (obj,) = bpy.context.selected_objects
     modifier = obj.modifiers.new("springsim", "MESH_CACHE")
     modifier.cache_format = cache_format
     modifier.filepath = cache_path
+    modifier.frame_start = start    # springsim's export numbers its first frame 1
     result = {}
     for frame in frames:
         bpy.context.scene.frame_set(frame)

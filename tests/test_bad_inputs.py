@@ -53,7 +53,8 @@ def refused(capsys, argv, key):
 @pytest.mark.parametrize("argv, key, says", [
     (["run", "jelly-plane", "--fps", "inf"], "fps", "finite"),
     (["run", "jelly-plane", "--fps", "nan"], "fps", "finite"),
-    (["run", "jelly-plane", "--fps", "1e9"], "fps", f"at most {MAX_FRAMES:,} frames"),
+    (["run", "jelly-plane", "--fps", "1e9", "--dt", "1e-6"], "fps",
+     f"at most {MAX_FRAMES:,} frames"),   # frames at the steps: 8e6 steps of 1e-6 s
     (["render", "jelly-plane", "--out", "x.mp4", "--fps", "1e6"], "fps",
      f"at most {MAX_FRAMES:,} frames"),
     (["render", "jelly-plane", "--out", "x.mp4", "--fps", "inf"], "fps", "finite"),

@@ -51,10 +51,10 @@ def blender(tmp_path_factory):
     paths = [folder / name for name in ("take.usd", "take.mdd", "take.pc2")]
     assert main(["export", "--quiet", str(npz), *map(str, paths)]) == 0
     last = recording.frame_count - 1
-    frames = [0, last // 2, last]
+    frames = [0, last // 2, last]    # recording frame f is Blender frame f + 1 (--start-frame 1)
     script = Path(__file__).with_name("blender_check.py")
     done = subprocess.run([sys.executable, str(script), str(paths[0]), str(folder / "take.obj"),
-                           str(paths[1]), str(paths[2]), *map(str, frames)],
+                           str(paths[1]), str(paths[2]), *(str(f + 1) for f in frames)],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     report = json.loads(done.stdout.strip().splitlines()[-1])
@@ -65,6 +65,7 @@ def test_blender_sees_the_recordings_frame_range_and_the_file_its_fps(blender):
     _, recording, _, report, usd_path = blender
     usd = report["usd"]
     assert usd["frame_end"] - usd["frame_start"] + 1 == recording.frame_count == 25
+    assert usd["frame_start"] == 1
     assert Usd.Stage.Open(str(usd_path)).GetTimeCodesPerSecond() == recording.fps == 24.0
 
 
@@ -74,7 +75,7 @@ def test_every_surface_vertex_and_ball_centre_is_where_the_recording_has_it(blen
     surface = np.unique(cube.surface)
     balls = simulation.model.arrays.balls
     for frame in frames:
-        seen = report["usd"]["frames"][str(frame)]
+        seen = report["usd"]["frames"][str(frame + 1)]
         expected = y_up_to_z_up(recording.positions[frame])
         np.testing.assert_allclose(seen["bodies"]["cube0"], expected[surface], atol=TOLERANCE)
         centres = [seen["balls"][f"ball_{number}"] for number in range(len(balls))]
@@ -88,7 +89,7 @@ def test_the_point_caches_move_the_rest_mesh_through_the_recording(blender, cach
     balls = simulation.model.arrays.balls
     radius = simulation.model.arrays.radius[balls]
     for frame in frames:
-        seen = np.asarray(report[cache][str(frame)])
+        seen = np.asarray(report[cache][str(frame + 1)])
         expected = y_up_to_z_up(recording.positions[frame])
         np.testing.assert_allclose(seen[:len(surface)], expected[surface], atol=TOLERANCE)
         spheres = seen[len(surface):].reshape(len(balls), -1, 3)

@@ -212,9 +212,37 @@ def test_a_run_killed_after_a_checkpoint_resumes_to_the_same_npz(tmp_path):
     assert_same_recording(tmp_path / "whole.npz", tmp_path / "part.npz")
 
 
-def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_path, capsys):
+def interrupted_after_first_checkpoint(monkeypatch):
+    original = checkpoint.write_checkpoint
+
+    def write_then_stop(*arguments):
+        original(*arguments)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    return original
+
+
+def test_a_completed_run_removes_its_checkpoint_and_an_interrupted_one_keeps_it(
+        tmp_path, monkeypatch, capsys):
     out = tmp_path / "x.npz"
     assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.npz"]
+    original = interrupted_after_first_checkpoint(monkeypatch)
+    assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    assert (tmp_path / "x.checkpoint.npz").exists()
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(tmp_path / "x.checkpoint.npz"), "--quiet"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.npz"]
+    capsys.readouterr()
+
+
+def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_path, capsys,
+                                                                            monkeypatch):
+    out = tmp_path / "x.npz"
+    assert main([*RUN, "--duration", "0.1", "--out", str(out)]) == 0
+    interrupted_after_first_checkpoint(monkeypatch)    # the run's checkpoint, its NPZ kept
+    assert main([*RUN, "--duration", "0.1", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    capsys.readouterr()
     saved = str(tmp_path / "x.checkpoint.npz")
     cases = [(["jelly-plane"], "give no scene"), (["--dt", "0.02"], "give no --dt"),
              (["--fps", "60"], "give no --fps"), (["--set", "drag=1"], "give no --set")]
@@ -229,3 +257,26 @@ def test_resume_refuses_options_that_would_change_the_run_and_foreign_files(tmp_
     assert code == 2 and "--resume CHECKPOINT" in err
     code, err = main([*RUN, "--checkpoint-every", "nan"]), capsys.readouterr().err
     assert code == 2 and err.startswith("springsim run: --checkpoint-every = nan")
+
+
+def test_a_resumed_runs_wall_time_includes_the_time_before_it_stopped(tmp_path, monkeypatch):
+    """Issue 28, item 8: after --resume the summary said "6.69 s stepping, 4.01 s with
+    recording": the checkpoint kept the stepping time so far but not the wall time. The wall
+    time (stepping and recording) is never less than the stepping time."""
+    out = tmp_path / "x.npz"
+    original = checkpoint.write_checkpoint
+
+    def write_then_stop(path, simulation, recording, frame, *rest):
+        original(path, simulation, recording, frame, *rest)
+        if frame == 10:
+            raise KeyboardInterrupt
+    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    assert main([*RUN, "--duration", "0.5", "--out", str(out), "--checkpoint-every", "0"]) == 130
+    with np.load(tmp_path / "x.checkpoint.npz") as data:
+        before = float(data["recording.step_seconds"]), float(data["recording.wall_seconds"])
+    assert 0 < before[0] <= before[1]
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(tmp_path / "x.checkpoint.npz"), "--quiet"]) == 0
+    with np.load(out) as data:
+        step, wall = float(data["step_seconds"]), float(data["wall_seconds"])
+    assert before[0] < step <= wall and before[1] < wall

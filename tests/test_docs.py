@@ -124,6 +124,8 @@ def test_scene_reference_rejects_nothing_it_lists():
         # a mesh's file has no default ("" must be replaced by a file's name)
         if key.default is None or key.path.endswith((".type", "bodies", "terrains", ".file")):
             continue
+        if key.path.count(".N") > 1:   # an item of a list empty by default (a cloth's pins):
+            continue                   # tests/test_cloth_mesh.py reads such tables from a file
         group, kind, _ = hook.group_type_key(key)
         scene = hook.base_scene(group, kind)
         concrete = key.path.replace(".N.", ".0.")

@@ -76,7 +76,7 @@ def test_usd_holds_every_surface_vertex_and_ball_at_every_frame(recorded, tmp_pa
     stage = Usd.Stage.Open(str(out))
     frames = recording.frame_count
     assert stage.GetTimeCodesPerSecond() == recording.fps == 20.0
-    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0, frames - 1)
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1, frames)  # from frame 1
     assert UsdGeom.GetStageUpAxis(stage) == "Y" and UsdGeom.GetStageMetersPerUnit(stage) == 1.0
     cube = simulation.model.bodies[0]
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/take/bodies/cube0"))
@@ -86,18 +86,18 @@ def test_usd_holds_every_surface_vertex_and_ball_at_every_frame(recorded, tmp_pa
     np.testing.assert_array_equal(np.sort(surface[indices], axis=1),
                                   np.sort(cube.surface, axis=1))
     for frame in range(frames):
-        points = np.asarray(mesh.GetPointsAttr().Get(frame), float)
+        points = np.asarray(mesh.GetPointsAttr().Get(frame + 1), float)
         np.testing.assert_allclose(points, recording.positions[frame][surface], atol=1e-5)
         if frame == 0:   # wound to face outwards: the enclosed volume is positive, 4 x 4 x 4 m
             a, b, c = (points[indices[:, k]] for k in range(3))
             assert np.einsum("ij,ij->", a, np.cross(b, c)) / 6 == pytest.approx(64.0, rel=1e-5)
-        extent = np.asarray(mesh.GetExtentAttr().Get(frame))
+        extent = np.asarray(mesh.GetExtentAttr().Get(frame + 1))
         np.testing.assert_allclose(extent, [points.min(0), points.max(0)])
     for number, particle in enumerate(simulation.model.arrays.balls):
         sphere = UsdGeom.Sphere(stage.GetPrimAtPath(f"/take/balls/ball_{number}"))
         assert sphere.GetRadiusAttr().Get() == simulation.model.arrays.radius[particle]
         for frame in (0, frames // 2, frames - 1):
-            world = sphere.ComputeLocalToWorldTransform(frame)
+            world = sphere.ComputeLocalToWorldTransform(frame + 1)
             np.testing.assert_allclose(np.asarray(world.ExtractTranslation()),
                                        recording.positions[frame, particle], atol=1e-9)
     plane = UsdGeom.Mesh(stage.GetPrimAtPath("/take/terrains/terrain_0_plane"))
@@ -121,7 +121,7 @@ def test_an_embedded_surface_exports_as_the_weighted_sums_of_its_particles(tmp_p
         for v in range(len(embedding.particles)):
             for k in range(8):
                 expected[v] += embedding.weights[v, k] * positions[frame, embedding.particles[v, k]]
-        np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(frame)), expected,
+        np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(frame + 1)), expected,
                                    atol=1e-5)
 
 
@@ -143,7 +143,7 @@ def test_mdd_and_pc2_unpack_by_their_specifications_to_the_recorded_points(recor
     data = pc2.read_bytes()                     # little-endian, a 32-byte header
     signature, version, points, start, rate, samples = struct.unpack("<12siiffi", data[:32])
     assert (signature, version, points, start, rate, samples) == \
-        (b"POINTCACHE2\0", 1, count, 0.0, 1.0, frames)
+        (b"POINTCACHE2\0", 1, count, 1.0, 1.0, frames)
     pc2_points = np.frombuffer(data[32:], "<f4").reshape(frames, count, 3)
 
     for cache in (mdd_points, pc2_points):
@@ -169,7 +169,7 @@ def test_a_recording_from_before_the_layout_still_exports_its_surface(recorded, 
     assert len(err.strip().splitlines()) == 1 and "balls and terrains are left out" in err
     stage = Usd.Stage.Open(str(tmp_path / "old.usda"))
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/take/bodies/jelly_balls"))
-    np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(3)),
+    np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(4)),
                                recording.positions[3][np.unique(recording.surface)], atol=1e-5)
 
 
@@ -226,10 +226,10 @@ def test_run_export_writes_the_recorded_frames(tmp_path):
                  "--export", str(mdd)]) == 0
     take = load_take(npz)
     stage = Usd.Stage.Open(str(usd))
-    assert stage.GetEndTimeCode() == take.frame_count - 1 == 2
+    assert stage.GetEndTimeCode() == take.frame_count == 3
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/take/bodies/cube0"))
     surface = np.unique(take.layout.bodies[0].surface)
-    np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(2)),
+    np.testing.assert_allclose(np.asarray(mesh.GetPointsAttr().Get(3)),
                                take.positions[2, surface], atol=1e-5)
     assert (tmp_path / "run.obj").exists() and mdd.stat().st_size > 0
 
@@ -240,7 +240,7 @@ def test_a_failed_write_leaves_the_old_files_and_no_temporary_one(recorded, tmp_
     (tmp_path / "take.mdd").write_bytes(b"old cache")
     (tmp_path / "take.obj").write_text("old mesh")
 
-    def broken(file, points, times, fps):
+    def broken(file, points, times, fps, start_frame):
         file.write(b"half a cache")
         raise OSError("disk full")
 

@@ -47,7 +47,7 @@ def test_the_pc2_of_a_mesh_body_moves_the_original_file_in_blender(tmp_path):
     frames = [0, last // 2, last]
     code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import blender_check; "
             "print(json.dumps(blender_check.point_cache(sys.argv[2], sys.argv[3], 'PC2', "
-            "[int(f) for f in sys.argv[4:]])))")
+            "[int(f) + 1 for f in sys.argv[4:]])))")
     done = subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent), str(original),
                            str(tmp_path / "take.pc2"), *map(str, frames)],
                           capture_output=True, text=True, timeout=300)
@@ -58,5 +58,5 @@ def test_the_pc2_of_a_mesh_body_moves_the_original_file_in_blender(tmp_path):
     for frame in frames:
         expected = body_surface(simulation.model.bodies[0], recording.positions[frame]).vertices
         assert expected.shape == (file_vertices, 3)
-        np.testing.assert_allclose(seen[str(frame)], np.stack(
+        np.testing.assert_allclose(seen[str(frame + 1)], np.stack(
             [expected[:, 0], -expected[:, 2], expected[:, 1]], axis=1), atol=TOLERANCE)

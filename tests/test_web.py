@@ -50,7 +50,9 @@ def test_the_server_holds_the_recorded_positions_of_the_frame_shown(take_path):
                                        cube.vertices(take.positions[frame]), atol=1e-6)
             centres = [ball.position for ball in parts["balls"]]
             np.testing.assert_allclose(centres, take.positions[frame, take.layout.ball_particles])
-            assert replay.frame_slider.value == frame
+            assert replay.frame_slider.value == frame + 1   # numbered from 1, as "frame 1 of N"
+        replay.frame_slider.value = 5                       # the slider at 5: frame 5 of N
+        assert replay.timeline.frame == 4
         replay.set_drawn("structural", True)
         assert parts["structural"][0].visible
         replay.set_drawn("surfaces", False)

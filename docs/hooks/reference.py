@@ -88,7 +88,8 @@ NOTES = {
     "bodies/*/edge_length": ("m", "length of an edge"),
     "bodies/*/particle_mass": ("kg", "mass of each particle"),
     "bodies/cube/position": ("m", "where particle (N//2, N//2, N//2) starts"),
-    "bodies/cloth/position": ("m", "centre of the sheet"),
+    "bodies/cloth/position": ("m", "centre of the sheet; with a `file`, added to the mesh's "
+                                   "coordinates after scale and rotation"),
     "bodies/mesh/position": ("m", "added to the mesh's coordinates after scale and rotation"),
     "bodies/*/velocity": ("m/s", "initial velocity of every particle"),
     "bodies/*/rotation_degrees": ("degrees", "initial rotation about `rotation_axis`"),
@@ -96,6 +97,26 @@ NOTES = {
     "bodies/*/pinned": ("", "particle numbers held fixed in space"),
     "bodies/cloth/pinned": ("", "`corners`, `none`, `edge` (the +z edge), `edge+z`, `edge-z`, "
                                 "`edge+x`, `edge-x`, or a list of particle numbers"),
+    "bodies/cloth/file": ("", "a triangle or quad mesh (OBJ, STL, PLY, OFF, GLB, GLTF) to be "
+                              "the cloth instead of the grid; relative to the scene file's "
+                              "folder"),
+    "bodies/cloth/scale": ("", "factor on the file's coordinates"),
+    "bodies/cloth/material": ("", "a material per area instead of `particle_mass` and per-kind "
+                                  "`ks`, `kd`: the same cloth at any resolution"),
+    "bodies/cloth/material.density": ("kg/m²", "mass per area, shared among each face's corners"),
+    "bodies/cloth/material.stretch": ("N/m", "stiffness per unit strain along the edges"),
+    "bodies/cloth/material.shear": ("N/m", "stiffness per unit strain across quad diagonals"),
+    "bodies/cloth/material.bend": ("N/m", "each bend spring's stiffness"),
+    "bodies/cloth/material.stretch_damping": ("N s/m", "damping per unit strain rate, edges"),
+    "bodies/cloth/material.shear_damping": ("N s/m", "damping per unit strain rate, diagonals"),
+    "bodies/cloth/material.bend_damping": ("N s/m", "each bend spring's damping"),
+    "bodies/cloth/pins": ("", "the `[[bodies.pins]]` tables: more pinned particles, each "
+                              "chosen one way"),
+    "bodies/cloth/pins.N.particles": ("", "particle numbers to pin"),
+    "bodies/cloth/pins.N.region": ("", "a box; the particles that start inside it are pinned"),
+    "bodies/cloth/pins.N.region.min": ("m", "the box's lowest corner"),
+    "bodies/cloth/pins.N.region.max": ("m", "the box's highest corner"),
+    "bodies/cloth/pins.N.group": ("", "an OBJ group (`g` or `o` name) of the cloth's file"),
     "bodies/cloth/width": ("m", "size along the sheet's local x axis"),
     "bodies/cloth/height": ("m", "size along the sheet's local z axis"),
     "bodies/*/drag": ("N s/m", "the body's own viscous drag, added to the scene's `drag`"),

@@ -6,43 +6,43 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
-from importlib.metadata import PackageNotFoundError
-from importlib.metadata import version as _version
+import importlib
+from importlib.metadata import PackageNotFoundError, version as _version
+from typing import TYPE_CHECKING
 
-from .errors import SceneError, SimulationDiverged
-from .integrators import integrator_names
-from .presets import preset_names
-from .scene import Scene
-from .scenefile import load_scene
-from .simulation import Simulation
-from .sweeps import sweep
-
-
-
-def __getattr__(name):
-    """``springsim.gradient`` (springsim.gradients.gradient), imported on first use: a plain run
-    does not need the adjoint's modules."""
-    if name == "gradient":
-        from .gradients import gradient
-
-        return gradient
-    raise AttributeError(f"module 'springsim' has no attribute {name!r}")
-
+if TYPE_CHECKING:   # what the reference documents; imported at first use at run time (below)
+    from .errors import SceneError, SimulationDiverged
+    from .gradients import gradient
+    from .integrators import integrator_names
+    from .presets import preset_names
+    from .scene import Scene
+    from .scenefile import load_scene
+    from .simulation import Simulation
+    from .sweeps import sweep
 
 try:
     __version__ = _version("springsim")   # pyproject.toml's, as installed: one place says it
 except PackageNotFoundError:              # a source tree on sys.path with no install
     __version__ = "0+unknown"
 
-__all__ = [
-    "Scene",
-    "SceneError",
-    "Simulation",
-    "SimulationDiverged",
-    "__version__",
-    "gradient",
-    "integrator_names",
-    "load_scene",
-    "preset_names",
-    "sweep",
-]
+__all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverged", "load_scene",
+           "integrator_names", "preset_names", "sweep", "gradient"]
+
+# Where each public name lives, imported at its first use (PEP 562): the command line starts,
+# and takes over Ctrl-C (signals.py), before NumPy and Numba load, which takes about a second.
+_PUBLIC = {"Simulation": "simulation", "Scene": "scene", "SceneError": "errors",
+           "SimulationDiverged": "errors", "load_scene": "scenefile",
+           "integrator_names": "integrators", "preset_names": "presets", "sweep": "sweeps",
+           "gradient": "gradients"}
+
+
+def __getattr__(name):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'springsim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted([*globals(), *_PUBLIC])

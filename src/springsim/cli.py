@@ -10,8 +10,8 @@ import signal
 import sys
 import warnings
 
-from . import __version__, commands
-from .errors import OutputFailed, SceneError, SimulationDiverged
+from . import __version__, commands, signals
+from .signals import Terminated  # noqa: F401 - where callers have always found it
 
 # Exit codes (README, "The command line").
 BAD_INPUT, DIVERGED, NO_RENDERER, WRITE_FAILED = 2, 3, 4, 5
@@ -45,23 +45,35 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C so that every half-written file is removed on the way out."""
-
-
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        with terminate_like_interrupt(), quiet_overflow(), one_line_warnings(args.command):
-            return args.handler(args)
-    except (SceneError, SimulationDiverged, OutputFailed) as error:
-        print(f"springsim {args.command}: {error}", file=sys.stderr)
-        return (BAD_INPUT if isinstance(error, SceneError)
-                else DIVERGED if isinstance(error, SimulationDiverged) else WRITE_FAILED)
-    except KeyboardInterrupt as interrupt:
-        terminated = isinstance(interrupt, Terminated)
-        print("terminated" if terminated else "interrupted", file=sys.stderr)
-        return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+    # Ctrl-C and SIGTERM are taken over first, before NumPy and Numba load (a second)
+    with signals.handled():
+        try:
+            from .errors import OutputFailed, SceneError, SimulationDiverged
+
+            args = build_parser().parse_args(argv)
+            try:
+                with quiet_overflow(), one_line_warnings(args.command):
+                    return args.handler(args)
+            except (SceneError, SimulationDiverged, OutputFailed) as error:
+                print(f"springsim {args.command}: {error}", file=sys.stderr)
+                return (BAD_INPUT if isinstance(error, SceneError)
+                        else DIVERGED if isinstance(error, SimulationDiverged) else WRITE_FAILED)
+        except KeyboardInterrupt as interrupt:
+            terminated = isinstance(interrupt, signals.Terminated)
+            print("terminated" if terminated else "interrupted", file=sys.stderr)
+            _forget_unhandled_interrupt()
+            return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+
+
+def _forget_unhandled_interrupt() -> None:
+    """CPython kills itself with SIGINT at exit, whatever main returns, once a KeyboardInterrupt
+    has left code that C ran with PyRun_String (an extension's lazy import); signals.py keeps
+    Ctrl-C out of such code, and this is the net under it: the interrupt was handled here."""
+    import ctypes
+
+    with contextlib.suppress(Exception):   # 3.11's flag; elsewhere it is not exported
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
 
 
 @contextlib.contextmanager
@@ -73,25 +85,6 @@ def one_line_warnings(command: str):
     with warnings.catch_warnings():
         warnings.showwarning = show
         yield
-
-
-@contextlib.contextmanager
-def terminate_like_interrupt():
-    """While a command runs, SIGTERM raises Terminated (in the main thread only: elsewhere
-    Python cannot install handlers, and the caller keeps its own)."""
-    try:
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _raise_terminated(signum, frame):
-    raise Terminated()
 
 
 def quiet_overflow():

@@ -52,7 +52,8 @@ class ModelArrays(NamedTuple):
     particle_triangles: np.ndarray = np.empty(0, np.int64)    # (3T,) rows of sheet_triangles
     # Body-body contact of surfaces (collision/shapes/surfaces.py, collision/pipeline.py); empty
     # when no two surfaces can touch
-    particle_body: np.ndarray = np.empty(0, np.int64)         # (P,) the body of each particle
+    particle_body: np.ndarray = np.empty(0, np.int64)         # (P,) each particle's contact body:
+                                                              # a connected piece of a body
     surface_points: np.ndarray = np.empty(0, np.int64)        # (Q,) particles on a surface
     surface_triangles: np.ndarray = np.empty((0, 3), np.int64)  # (T,) particle numbers
     surface_edges: np.ndarray = np.empty((0, 2), np.int64)    # (E,) the triangles' edges

@@ -3,6 +3,7 @@ the state after ``round(k / (fps dt))`` steps, the last at ``duration``), and th
 to, written whole or not at all (``safe_files.py``). The simulation advances in whole steps, one
 compiled call per frame, and ``time`` holds the exact simulated time of each frame.
 """
+import math
 import sys
 import time
 from dataclasses import dataclass, field, fields
@@ -13,6 +14,7 @@ from .energy import gravitational_energy, kinetic_energy, spring_energy
 from .recording_layout import LAYOUT_KEYS, layout_arrays
 from .safe_files import atomic_output
 from .sampling import frame_steps
+from .warmup import announced
 
 
 
@@ -107,23 +109,42 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
         recording.capture(0, simulation)
     else:
         recording, first = start
-    simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
+    with announced(simulation.integrator.name, say=progress):
+        simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
     started = time.perf_counter() - recording.wall_seconds
     with tqdm(total=int(steps[-1]), initial=int(steps[first - 1]), unit="step",
               desc=simulation.scene.name, leave=False, file=sys.stderr,
               disable=None if progress else True) as bar:
+        end = recording.time[0] + duration
         for frame in range(first, len(steps)):
             count = int(steps[frame] - steps[frame - 1])
             step_started = time.perf_counter()
-            simulation.step(count)
+            if frame == len(steps) - 1:   # the last frame is at the duration, exactly
+                count, rest = last_steps(end - simulation.time, simulation.dt)
+                simulation.step(count)
+                if rest > 0:
+                    simulation.step_shorter(rest)
+                    count += 1
+            else:
+                simulation.step(count)
             recording.step_seconds += time.perf_counter() - step_started
             recording.steps += count
             recording.capture(frame, simulation)
             bar.update(count)
             if on_frame is not None:
+                # a checkpoint keeps the time so far: a resumed run's wall time includes it
+                recording.wall_seconds = time.perf_counter() - started
                 on_frame(recording, frame)
     recording.wall_seconds = time.perf_counter() - started
     return recording
+
+
+def last_steps(seconds: float, dt: float) -> tuple[int, float]:
+    """The whole steps of ``dt`` that fit in ``seconds``, and the shorter step after them that
+    ends exactly there (0 when they end within a millionth of a step of it)."""
+    whole = max(0, math.floor(seconds / dt + 1e-6))
+    rest = seconds - whole * dt
+    return whole, (rest if rest > 1e-6 * dt else 0.0)
 
 
 def deepest_penetration(model, x: np.ndarray) -> float:

@@ -43,6 +43,7 @@ import logging
 import os
 from dataclasses import dataclass
 
+from . import signals
 from .errors import SceneError, SimulationDiverged, require
 
 ALLOWED_FAILURES = 1        # worker deaths a task may cause on a local cluster and still be retried
@@ -111,10 +112,13 @@ class Runner:
         import dask
         from distributed import Client, LocalCluster
 
-        with self._stack:
+        # A cluster stopped half-started cannot be closed: its worker processes print tracebacks
+        # and its exit hook fails. Ctrl-C and SIGTERM wait until it has started (signals.py).
+        with signals.deferred(), self._stack:
             if self.address:
                 self.client = self._stack.enter_context(_connect(Client, self.address))
             else:
+                _quiet_resource_tracker()
                 with dask.config.set({**LOCAL_SCHEDULER, **_fork_server()}):
                     cluster = self._stack.enter_context(LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
@@ -127,7 +131,8 @@ class Runner:
         return self
 
     def __exit__(self, *exc_info) -> None:
-        self._stack.close()
+        with signals.deferred():   # nor half-closed
+            self._stack.close()
 
     def map(self, function, items):
         """``Outcome``s of ``function(item)`` for every item, in the order they finish."""
@@ -166,6 +171,19 @@ def _outcome(index: int, future) -> Outcome:
                                                "memory) on every try"))
     except Exception as error:   # noqa: BLE001 - the task's own error, for the caller to judge
         return Outcome(index, error=error)
+
+
+# multiprocessing's resource tracker, a process of its own, removes the semaphore of a worker
+# killed mid-run (a sweep stopped by Ctrl-C) and warns of it on stderr, after the command's
+# one-line answer: not news to the user. Its -W options are this process's sys.warnoptions.
+QUIET_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
+
+
+def _quiet_resource_tracker() -> None:
+    import sys
+
+    if QUIET_TRACKER not in sys.warnoptions:
+        sys.warnoptions.append(QUIET_TRACKER)
 
 
 def _fork_server() -> dict:
@@ -212,7 +230,9 @@ def warm_kernels(scenes) -> None:
     Errors are left to the runs themselves, which report them.
     """
     from .simulation import Simulation
+    from .warmup import announced
 
     for scene in scenes:
-        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError):
+        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError), \
+                announced(scene.integrator):
             Simulation(copy.deepcopy(scene)).step(1)

@@ -3,7 +3,8 @@
 One rule for every command (``run``, ``render``, ``run --video``, export): ``duration`` and
 ``fps`` are finite and > 0; frame k is the state after ``round(k / (fps dt))`` steps for
 k = 0 .. floor(duration fps), plus a last frame at ``duration`` when it falls between two (so a
-recording ends where it was asked to). Each frame is a whole number of steps from the start, not a
+recording ends where it was asked to; ``recording.record`` takes whole steps up to the duration
+and a shorter last one that ends exactly there when dt does not divide it). Each frame is a whole number of steps from the start, not a
 fixed number of steps per frame, so the frames stay within dt/2 of k/fps (a video stays in real
 time at dt = 1/60 s and 25 fps). When 1/fps is shorter than dt neighbouring frames repeat a state:
 the frame count, and so a video's pace, stays that of the fps asked for.

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError, require
+from .file_kinds import is_recording_file
 from .presets import PRESETS, preset
 from .scene import Scene
 from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
@@ -72,12 +73,18 @@ def load_scene(name_or_path, overrides=()) -> Scene:
 
 
 def read_scene_file(path: Path) -> Scene:
+    require(not is_recording_file(path), "scene", str(path),
+            "is a recording (an NPZ file), not a scene file; `springsim render`, `export` and "
+            "`play` read recordings")
     try:
         table = tomllib.loads(read_text_safely(path))
     except FileNotFoundError:
         raise SceneError("scene", str(path), "no such file; give a .toml scene file or one of "
                          + ", ".join(PRESETS)) from None
-    except (OSError, UnicodeDecodeError) as error:
+    except UnicodeDecodeError:
+        raise SceneError("scene", str(path), "is neither a scene file (it is not UTF-8 text) nor "
+                         "a recording (it is not an NPZ file)") from None
+    except OSError as error:
         raise SceneError("scene", str(path), f"cannot be read ({error})") from None
     except tomllib.TOMLDecodeError as error:
         raise SceneError("scene", str(path), f"is not valid TOML: {error}") from None
@@ -179,6 +186,9 @@ def set_path(node, parts: list[str], value, prefix: str, full_key: str):
     require(head in fields, full_key, value,
             f"unknown key; {describe(node, prefix)} takes " + ", ".join(fields))
     current = getattr(node, head)
+    if rest and current is None:       # an unset table (``X | None``): set keys of a new one
+        table = _unset_table(typing.get_type_hints(type(node)).get(head, typing.Any))
+        current = table[0]() if table is not None and table[1] == "" else None
     if rest:
         new = _descend(current, rest, value, key, full_key)
     else:
@@ -337,12 +347,28 @@ def _table_keys(node, prefix: str, owner: str) -> list[SceneKey]:
         if type(node) is Scene and name in TYPED_LISTS:
             keys.append(SceneKey(owner, path, "array of tables, each with a type", []))
             continue
-        keys.append(SceneKey(owner, path, _kind_text(hints.get(name, typing.Any), value), value))
+        annotation = hints.get(name, typing.Any)
+        keys.append(SceneKey(owner, path, _kind_text(annotation, value), value))
         if dataclasses.is_dataclass(value):
             keys += _table_keys(value, path, owner)
         elif is_table_list(value):
             keys += _table_keys(value[0], f"{path}.N", owner)
+        elif (table := _unset_table(annotation)) is not None:   # `X | None` or `list[X]`
+            keys += _table_keys(table[0](), path + table[1], owner)
     return keys
+
+
+def _unset_table(annotation):
+    """(the dataclass, the key suffix) of a field that holds a table but is unset by default:
+    ``X | None`` (``""``) or ``list[X]`` (``".N"``), so that the reference lists its keys."""
+    annotation = strip_optional(annotation)
+    if dataclasses.is_dataclass(annotation):
+        return annotation, ""
+    arguments = typing.get_args(annotation)
+    if typing.get_origin(annotation) is list and arguments and dataclasses.is_dataclass(
+            arguments[0]):
+        return arguments[0], ".N"
+    return None
 
 
 def _kind_text(annotation, default) -> str:

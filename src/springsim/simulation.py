@@ -10,6 +10,7 @@ import numbers
 
 import numpy as np
 
+from . import signals
 from .energy import energies
 from .errors import SceneError, SimulationDiverged, require
 from .integrators import available_threads, get_integrator
@@ -106,19 +107,31 @@ class Simulation:
                 f"must be a whole number of steps from 0 to 2^53 = {MAX_STEPS}")
         require(_is_finite_number(self.dt) and self.dt > 0, "dt", self.dt,
                 "must be a time step > 0 s (a finite number)")
+        self._advance(self.dt, int(count))
+
+    def step_shorter(self, seconds: float) -> None:
+        """One step of ``seconds`` (0 < seconds < dt): a run ends exactly at its duration when dt
+        does not divide it."""
+        require(_is_finite_number(seconds) and 0 < seconds <= self.dt, "seconds", seconds,
+                f"must be a time > 0 s and at most dt = {self.dt:g} s")
+        self._advance(float(seconds), 1)
+
+    def _advance(self, dt: float, count: int) -> None:
         self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
-        done, particle = self.integrator.advance(self.model, self.state, self.dt, int(count),
-                                                 self.threads)
-        self._lists_left = (self.state.pairs, self.state.solve_pairs)
-        self.state.time += done * self.dt
-        self.state.steps += done
+        # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
+        with signals.deferred():
+            done, particle = self.integrator.advance(self.model, self.state, dt, count,
+                                                     self.threads)
+            self._lists_left = (self.state.pairs, self.state.solve_pairs)
+            self.state.time += done * dt
+            self.state.steps += done
         if particle >= 0:
             v = self.state.velocities[particle]
             with np.errstate(over="ignore", invalid="ignore"):   # inf is the honest answer
                 speed_squared = float(v @ v)
             raise SimulationDiverged(
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
-                dt=self.dt, particle=particle, position=self.state.positions[particle],
+                dt=dt, particle=particle, position=self.state.positions[particle],
                 speed_squared=speed_squared)
 
     def _surface_shapes(self) -> tuple[int, int]:

@@ -126,8 +126,10 @@ class Cube(LatticeSprings, SurfaceContact):
 def lattice_pattern(index: np.ndarray, body) -> tuple[np.ndarray, np.ndarray]:
     """The cube's springs between the sites of a 3-D lattice: (S, 2) int32 particle numbers and
     their (S,) SpringKind. ``index`` maps lattice coordinates to particle numbers, -1 where the
-    lattice has no particle (a mesh body's outside); ``body`` holds the spring tables
-    (structural, shear, bend, face_springs, face). A full lattice gives the cube's springs."""
+    lattice has no particle (a mesh body's outside); a spring needs both ends, and a bend spring
+    its middle site too (else it would bridge a gap between two parts). ``body`` holds the
+    spring tables (structural, shear, bend, face_springs, face). A full lattice gives the
+    cube's springs."""
     groups = [(SpringKind.STRUCTURAL, STRUCTURAL_OFFSETS, body.structural),
               (SpringKind.SHEAR, SHEAR_OFFSETS, body.shear),
               (SpringKind.BEND, BEND_OFFSETS, body.bend)]
@@ -136,15 +138,29 @@ def lattice_pattern(index: np.ndarray, body) -> tuple[np.ndarray, np.ndarray]:
         if not params.builds:
             continue
         for offset in kind_offsets:
-            springs.append(lattice_springs(index, offset))
+            pairs = lattice_springs(index, offset)
+            present = np.all(pairs >= 0, axis=1)
+            if kind == SpringKind.BEND:
+                present &= middle_sites(index, offset) >= 0
+            springs.append(pairs[present])
             kinds.append(kind)
     if body.face_springs and body.face.builds:
-        springs.append(face_to_face_springs(index))
+        pairs = face_to_face_springs(index)
+        springs.append(pairs[np.all(pairs >= 0, axis=1)])
         kinds.append(SpringKind.FACE)
-    springs = [pairs[np.all(pairs >= 0, axis=1)] for pairs in springs]   # both ends present
     kinds = [np.full(len(pairs), kind, np.int8) for pairs, kind in zip(springs, kinds)]
     return (np.concatenate(springs) if springs else np.empty((0, 2), np.int32),
             np.concatenate(kinds) if kinds else np.empty(0, np.int8))
+
+
+def middle_sites(index: np.ndarray, offset: tuple[int, ...]) -> np.ndarray:
+    """The site halfway along each pair ``lattice_springs(index, offset)`` gives (offsets of
+    even, non-negative steps, as the bend springs')."""
+    middle = []
+    for axis, step in enumerate(offset):
+        size = index.shape[axis]
+        middle.append(slice(step // 2, size - step + step // 2))
+    return index[tuple(middle)].ravel()
 
 
 def spring_parameters(body) -> dict:

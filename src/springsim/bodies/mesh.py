@@ -22,8 +22,9 @@ file's own surface riding the lattice.
   round-off. The exporters' point caches therefore list the file's own vertices in its order,
   and apply to the same file opened in Blender or Houdini.
 - Separate parts: shells whose kept cells share no corner are separate pieces of particles with
-  no spring between them; they move independently, as one body. Like any body's own surface,
-  they do not collide with each other unless ``self_collision`` is on.
+  no spring between them; they move independently and collide with each other as two bodies
+  would (contact numbers each connected piece of a body as a body of its own,
+  collision/shapes/surfaces.py), while the file stays one body (one point cache).
 - Contact: terrains push on the particles. A vertex being a convex combination of particles, no
   vertex goes below a plane that no particle goes below, so the body keeps no extra distance from
   terrains (its ``terrain_offsets`` are zero). The particles of cells the surface passes through

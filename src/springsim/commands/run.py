@@ -17,7 +17,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--fps", type=float,
                         help=f"frames recorded per simulated second (default: {DEFAULT_FPS:g})")
     parser.add_argument("--out", metavar="PATH",
-                        help="the NPZ file to write (default: SCENE_NAME.npz here)")
+                        help="the NPZ file to write (default: here, named after the scene file, "
+                             "or after the built-in scene)")
     parser.add_argument("--plot", metavar="IMAGE",
                         help="also chart the energies over time (.png, .pdf or .svg)")
     parser.add_argument("--video", metavar="PATH",
@@ -30,16 +31,20 @@ def add_arguments(parser) -> None:
                         help="no progress bar and no summary (errors are still shown)")
     parser.add_argument("--checkpoint-every", type=float, metavar="SECONDS",
                         help="every SECONDS of wall-clock time, save the run so far to "
-                             "OUT.checkpoint.npz (0: after every frame), for --resume")
+                             "OUT.checkpoint.npz (0: after every frame), for --resume; removed "
+                             "when the run completes")
     parser.add_argument("--resume", metavar="CHECKPOINT",
                         help="continue the run a checkpoint holds (its scene and options); "
                              "the output is the same as had it never stopped")
 
 
-def add_scene_arguments(parser, scene_optional: bool = False) -> None:
-    """The scene and the options that change it, shared with `springsim bench`."""
+def add_scene_arguments(parser, scene_optional: bool = False, recording: bool = False) -> None:
+    """The scene and the options that change it, shared with `springsim bench`; ``recording``:
+    the command also takes a recording in place of the scene."""
     parser.add_argument("scene", nargs="?" if scene_optional else None,
-                        help="a built-in scene (see `springsim scenes`) or a .toml file")
+                        help="a built-in scene (see `springsim scenes`) or a .toml file"
+                             + (", or a recording (an NPZ file of `springsim run`)"
+                                if recording else ""))
     parser.add_argument("--integrator", help="integrator name (default: the scene's)")
     parser.add_argument("--dt", type=float, metavar="SECONDS",
                         help="time step in s (default: the scene's)")
@@ -85,7 +90,9 @@ def run(args) -> int:
     if args.checkpoint_every is not None:
         check_interval(args.checkpoint_every)
     scene = resumed.scene if resumed else scene_from_arguments(args)
-    out = args.out or default_output(scene.name)
+    if not resumed:
+        args.fps = step_fps(scene.dt, args.fps, duration=scene.duration, quiet=args.quiet)
+    out = args.out or default_output(output_name(args.scene, scene.name))
     # Every output and the frames' memory are checked before simulating, so that a long run
     # never ends in a typo or an allocation the machine cannot hold.
     check_output_path("--out", out)
@@ -102,6 +109,7 @@ def run(args) -> int:
     simulation = Simulation(scene, threads=args.threads)
     recording = record_run(simulation, args, out, resumed)   # record, with checkpoints
     write_npz(out, recording.arrays())
+    remove_checkpoint(out, args, resumed)
     written = [out]
     written += export_recording(recording, args.export, key="--export")
     if args.plot:
@@ -123,6 +131,24 @@ def run(args) -> int:
     return 0
 
 
+def step_fps(dt: float, fps: float, duration: float | None = None, quiet: bool = False) -> float:
+    """The frame rate to record at: ``fps``, or one frame a step (1/dt) when a step is longer
+    than a frame, said on stderr once the frame count is known to be allowed (bad input is one
+    line). Frames between two steps would repeat the state before them: a take exported from
+    them stutters (every other frame frozen at dt = 2/fps)."""
+    from ..sampling import check_fps, frame_count
+
+    check_fps(fps)
+    if dt * fps <= 1:
+        return fps
+    if duration is not None:
+        frame_count(duration, 1 / dt, dt)
+    if not quiet:
+        print(f"springsim run: dt = {dt:g} s is longer than 1/fps = {1 / fps:g} s: recording "
+              f"a frame at every step, at the steps' own times ({1 / dt:g} fps)", file=sys.stderr)
+    return 1 / dt
+
+
 def write_video_of(simulation, recording, path) -> str | None:
     """Render the recorded frames with springsim.render; the reason when it cannot, else None."""
     try:
@@ -136,6 +162,33 @@ def write_video_of(simulation, recording, path) -> str | None:
     except unavailable as error:
         return str(error)
     return None
+
+
+def output_name(scene_argument: str, scene_name: str) -> str:
+    """A scene file's output is named after the file (two files of one scene, or a copy of a
+    built-in scene, do not overwrite each other's); a built-in scene's after the scene."""
+    from pathlib import Path
+
+    from ..presets import PRESETS
+
+    if scene_argument in PRESETS or not Path(scene_argument).is_file():
+        return scene_name
+    return Path(scene_argument).stem
+
+
+def remove_checkpoint(out: str, args, resumed) -> None:
+    """The run is complete and its NPZ written: its checkpoint (written with --checkpoint-every,
+    or resumed from) has nothing more to give, and goes."""
+    import os
+
+    from ..checkpoint import checkpoint_path
+
+    if args.checkpoint_every is None and resumed is None:
+        return
+    try:
+        os.unlink(checkpoint_path(out))
+    except FileNotFoundError:
+        pass
 
 
 def default_output(scene_name: str) -> str:

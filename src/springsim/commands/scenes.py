@@ -26,5 +26,25 @@ def run(args) -> int:
         for name, (_, description) in PRESETS.items():
             print(f"{name:<{width}}  {description}")
         return 0
-    print(scene_to_toml(load_scene(args.scene, args.set), only_changes=args.short), end="")
+    text = scene_to_toml(load_scene(args.scene, args.set), only_changes=args.short)
+    print(explain_package_files(text), end="")
     return 0
+
+
+def explain_package_files(text: str) -> str:
+    """A ``file = "..."`` line naming a mesh installed with springsim gets a comment above it:
+    the path is this installation's (it works from any folder while springsim stays installed
+    there), and how to keep the mesh with the scene instead."""
+    from pathlib import Path
+
+    package = str(Path(__file__).resolve().parents[1])
+    lines = []
+    for line in text.splitlines(keepends=True):
+        if line.startswith("file = ") and package in line:
+            name = Path(line.split("=", 1)[1].strip().strip('"')).name
+            lines.append(f"# {name} is installed with springsim: this absolute path works from "
+                         "any folder while springsim\n# stays installed here. To keep the mesh "
+                         f"with this scene, copy it beside this file and write file = \"{name}\""
+                         "\n# (a relative path is read from the scene file's folder).\n")
+        lines.append(line)
+    return "".join(lines)

@@ -69,7 +69,8 @@ def run(args) -> int:
     print("\n".join(table_lines(limits)))
     write_csv(args.csv, limits, seconds, tolerance)
     plot_limits(args.png, limits, seconds)
-    print(f"\n{len(scenes)} scenes x {len(integrators)} integrators, {seconds:g} s per trial, "
+    print(f"\n{plural(len(scenes), 'scene')} x {plural(len(integrators), 'integrator')}, "
+          f"{seconds:g} s per trial, "
           f"tolerance {tolerance:g}: {sum(len(limit.trials) for limit in limits)} trials in "
           f"{elapsed:.0f} s. Wrote {args.csv} and {args.png}.")
     return 0
@@ -178,3 +179,8 @@ def plot_limits(path, limits, seconds: float) -> None:
     axes.legend(fontsize="small", ncols=min(3, len(integrators)))
     with atomic_output(path) as file:
         figure.savefig(file, format="png")
+
+
+def plural(count: int, noun: str) -> str:
+    """"1 scene", "2 scenes"."""
+    return f"{count} {noun}" + ("" if count == 1 else "s")

@@ -1,4 +1,5 @@
 """`springsim sweep`: one scene over a grid of values, on every local core or a Dask cluster."""
+import os
 import sys
 
 from ._workers import add_worker_arguments
@@ -47,6 +48,6 @@ def run(args) -> int:
         for row in table:
             counts[row["status"]] = counts.get(row["status"], 0) + 1
         summary = ", ".join(f"{count} {status}" for status, count in sorted(counts.items()))
-        print(f"springsim sweep: {len(table)} runs ({summary}); wrote {args.out}/results.csv",
-              file=sys.stdout)
+        print(f"springsim sweep: {len(table)} runs ({summary}); wrote "
+              f"{os.path.join(args.out, 'results.csv')}", file=sys.stdout)
     return 0

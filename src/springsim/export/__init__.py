@@ -12,12 +12,12 @@ import os
 from ..errors import require
 from .geometry import point_pieces
 from ..safe_files import check_output_path
-from .take import Take, load_take, take_from_arrays
+from .take import Take, is_recording_file, load_take, names_recording, resampled, take_from_arrays
 
 FORMAT_MODULES = ("usd", "mdd", "pc2", "obj")
 
 __all__ = ["Take", "check_exports", "check_target", "export", "export_recording", "exporter_for",
-           "extensions", "load_take", "take_from_arrays"]
+           "extensions", "is_recording_file", "load_take", "names_recording", "resampled", "take_from_arrays"]
 
 
 def _modules():

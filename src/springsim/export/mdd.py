@@ -23,7 +23,7 @@ def write(take, path) -> list:
     return write_with_rest_mesh(take, path, encode)
 
 
-def encode(file, points: np.ndarray, times: np.ndarray, fps: float) -> None:
+def encode(file, points: np.ndarray, times: np.ndarray, fps: float, start_frame: int = 0) -> None:
     frames, count = points.shape[:2]
     file.write(np.array([frames, count], ">i4").tobytes())
     file.write(times.astype(">f4").tobytes())

@@ -8,7 +8,9 @@ MOD_meshcache_pc2.cc: a 32-byte header, ``PC2Head``):
     float32 start frame, float32 sample rate (frames per sample), int32 sample count F,
     then sample by sample, point by point: float32 x, y, z.
 
-The start frame is 0 and the sample rate 1: sample k is frame k of the recording.
+The start frame is the take's (1 unless `export --start-frame` says otherwise) and the sample rate
+1: sample k is frame start + k. Blender's Mesh Cache modifier reads frames as its own "Frame
+Start" says, not the header: set it to the same number.
 """
 import numpy as np
 
@@ -27,8 +29,8 @@ def write(take, path) -> list:
     return write_with_rest_mesh(take, path, encode)
 
 
-def encode(file, points: np.ndarray, times: np.ndarray, fps: float) -> None:
+def encode(file, points: np.ndarray, times: np.ndarray, fps: float, start_frame: int = 0) -> None:
     frames, count = points.shape[:2]
-    header = np.array([(b"POINTCACHE2\0", 1, count, 0.0, 1.0, frames)], HEADER)
+    header = np.array([(b"POINTCACHE2\0", 1, count, float(start_frame), 1.0, frames)], HEADER)
     file.write(header.tobytes())
     file.write(points.astype("<f4").tobytes())

@@ -30,13 +30,14 @@ def rest_mesh_path(path) -> Path:
 
 
 def write_with_rest_mesh(take, path, encode) -> list:
-    """The cache ``path`` (its bytes from ``encode(points (F, N, 3), times (F,))``) and its rest
+    """The cache ``path`` (its bytes from ``encode(points (F, N, 3), times (F,), fps,
+    start_frame)``) and its rest
     mesh, both written whole or neither."""
     pieces = point_pieces(take.layout, take.positions[0])
     points = stacked_vertices(pieces, take.positions)
     obj = rest_mesh_path(path)
     with staged_paths([path, obj]) as (staged_cache, staged_obj):
         with open(staged_cache, "xb") as file:
-            encode(file, points, np.asarray(take.time, float), take.fps)
+            encode(file, points, np.asarray(take.time, float), take.fps, take.start_frame)
         write_obj(staged_obj, pieces, points[0], take.name)
     return [Path(path), obj]

@@ -8,14 +8,16 @@ springsim recording.
 import math
 import os
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import SceneError, require
+from ..file_kinds import NPZ_MAGIC, is_recording_file, names_recording  # noqa: F401
 from ..recording_layout import Layout, read_layout
 
 REQUIRED = ("time", "fps", "positions")
+START_FRAME = 1   # an exported take's first frame number: Blender's first frame, Houdini's too
 
 
 @dataclass(frozen=True)
@@ -26,6 +28,7 @@ class Take:
     positions: np.ndarray   # (F, P, 3) m
     layout: Layout
     arrays: dict            # everything the recording holds (energies, springs, ...)
+    start_frame: int = START_FRAME   # the number an exported file gives the first frame
 
     @property
     def frame_count(self) -> int:
@@ -70,6 +73,30 @@ def load_take(path, key: str = "recording") -> Take:
         raise SceneError(key, text, f"is not an NPZ file that `springsim run` wrote ({error})"
                          ) from None
     return take_from_arrays(arrays, text, key)
+
+
+def resampled(take: Take, fps: float, duration: float | None = None) -> Take:
+    """``take`` at ``fps`` frames per second (frame k at the first frame's time + k / fps) up to
+    ``duration`` s after it (default: its last frame): positions interpolated linearly between
+    the two recorded frames around each new time; the recorded frames themselves where the
+    times are the recording's."""
+    require(math.isfinite(fps) and fps > 0, "--fps", fps, "must be > 0")
+    start, last = float(take.time[0]), float(take.time[-1])
+    span = last - start if duration is None else min(float(duration), last - start)
+    count = int(math.floor(span * fps + 1e-6)) + 1
+    times = start + np.arange(count) / fps
+    if count <= take.frame_count and np.allclose(times, take.time[:count], rtol=0, atol=1e-9):
+        return replace(take, time=np.asarray(take.time[:count], float), fps=float(fps),
+                       positions=take.positions[:count])
+    if take.frame_count == 1:
+        positions = np.repeat(take.positions[:1], count, axis=0)
+    else:
+        before = np.clip(np.searchsorted(take.time, times, side="right") - 1, 0,
+                         take.frame_count - 2)
+        t0, t1 = take.time[before], take.time[before + 1]
+        weight = np.clip((times - t0) / np.where(t1 > t0, t1 - t0, 1.0), 0.0, 1.0)[:, None, None]
+        positions = (1 - weight) * take.positions[before] + weight * take.positions[before + 1]
+    return replace(take, time=times, fps=float(fps), positions=positions)
 
 
 def _check_layout(layout: Layout, particles: int, key: str, name) -> None:

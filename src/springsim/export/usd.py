@@ -2,13 +2,14 @@
 
 One stage: ``/take`` (the default prim) holding ``bodies/`` (a UsdGeom.Mesh per body surface with
 time-sampled points and extents), ``balls/`` (a UsdGeom.Sphere per ball with its radius and a
-time-sampled translate) and ``terrains/`` (static meshes). Frame k of the recording is time code
-k; the stage's timeCodesPerSecond (and framesPerSecond) is the recording's fps, its start and end
+time-sampled translate) and ``terrains/`` (static meshes). Frame k of the take is time code
+start_frame + k (Blender and Houdini number frames from 1); the stage's timeCodesPerSecond (and framesPerSecond) is the recording's fps, its start and end
 time codes are the first and last frame, its up axis is Y (springsim's) and a unit is 1 m. The
 extension picks the encoding: .usda text, .usdc binary (crate), .usd binary.
 """
 import numpy as np
 
+from .. import signals
 from ..errors import require
 from ..render import colors
 from .geometry import body_pieces, terrain_meshes, unique_names
@@ -25,13 +26,25 @@ def outputs(path) -> list:
 
 def check_available() -> None:
     try:
-        import pxr.Usd  # noqa: F401
+        _import_usd()
     except ImportError:
         require(False, "format", "usd", f"needs Pixar's usd-core: {INSTALL}")
 
 
+def _import_usd() -> None:
+    """Load usd-core's modules. Its C++ import code catches an exception raised while it runs
+    and prints a warning, so Ctrl-C there would be lost: the signal waits for the imports."""
+    with signals.deferred():
+        import pxr.Gf
+        import pxr.Tf
+        import pxr.Usd
+        import pxr.UsdGeom
+        import pxr.Vt  # noqa: F401
+
+
 def write(take, path) -> list:
     """Write ``take`` to the USD file ``path`` (its suffix picks the encoding)."""
+    _import_usd()
     from pxr import Usd, UsdGeom
 
     stage = Usd.Stage.CreateInMemory()
@@ -39,8 +52,8 @@ def write(take, path) -> list:
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     stage.SetTimeCodesPerSecond(take.fps)
     stage.SetFramesPerSecond(take.fps)
-    stage.SetStartTimeCode(0)
-    stage.SetEndTimeCode(take.frame_count - 1)
+    stage.SetStartTimeCode(take.start_frame)
+    stage.SetEndTimeCode(take.start_frame + take.frame_count - 1)
     root = UsdGeom.Xform.Define(stage, "/take")
     stage.SetDefaultPrim(root.GetPrim())
     root.GetPrim().SetCustomDataByKey("springsim:scene", take.name)
@@ -68,8 +81,9 @@ def _bodies(stage, take) -> None:
         vertices = piece.vertices(take.positions).astype(np.float32)   # (F, V, 3)
         low, high = vertices.min(axis=1), vertices.max(axis=1)
         for frame in range(take.frame_count):
-            points.Set(Vt.Vec3fArray.FromNumpy(vertices[frame]), frame)
-            extent.Set(Vt.Vec3fArray.FromNumpy(np.stack([low[frame], high[frame]])), frame)
+            code = take.start_frame + frame
+            points.Set(Vt.Vec3fArray.FromNumpy(vertices[frame]), code)
+            extent.Set(Vt.Vec3fArray.FromNumpy(np.stack([low[frame], high[frame]])), code)
 
 
 def _balls(stage, take) -> None:
@@ -87,7 +101,7 @@ def _balls(stage, take) -> None:
         sphere.CreateDisplayColorAttr([Gf.Vec3f(*colors.BALL_COLOR)])
         translate = sphere.AddTranslateOp()
         for frame, centre in enumerate(centres[:, number].tolist()):
-            translate.Set(Gf.Vec3d(*centre), frame)
+            translate.Set(Gf.Vec3d(*centre), take.start_frame + frame)
 
 
 def _terrains(stage, take) -> None:

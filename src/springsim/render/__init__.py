@@ -4,6 +4,14 @@
 of PNGs with no display and no GPU (polyscope's EGL backend on Mesa). polyscope is imported
 only when this package is.
 """
+from .. import signals
+
+# polyscope's C++ module init aborts the process (SIGABRT) when an exception is raised while it
+# runs: a Ctrl-C during the import waits for it to end (signals.py)
+with signals.deferred():
+    import polyscope
+    import polyscope.imgui  # noqa: F401
+
 from .backend import RenderUnavailable, capture, start_renderer
 from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_points, scene_points
 from .drawing import DrawOptions, SceneDrawing

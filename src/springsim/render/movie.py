@@ -1,4 +1,6 @@
 """Rendering recorded frames of a simulation to a video (MP4, GIF) or a folder of PNGs, headless."""
+import sys
+
 import numpy as np
 from tqdm import tqdm
 
@@ -22,7 +24,8 @@ def write_video(model, times, positions, path, *, fps=60, width=960, height=540,
 
 def render_video(model, times, positions, path, *, fps=60, width=960, height=540,
                  camera="auto", draw: DrawOptions | None = None, progress: bool = True):
-    """``write_video`` with a choice of what is drawn, and of the progress bar."""
+    """``write_video`` with a choice of what is drawn, and of the progress: a bar on stderr when
+    it is a terminal, else one line on stdout (a log gets no bars; stderr keeps to errors)."""
     positions = np.asarray(positions)
     times = np.asarray(times, float)
     require(positions.ndim == 3 and positions.shape[1:] == (model.particle_count, 3),
@@ -34,9 +37,12 @@ def render_video(model, times, positions, path, *, fps=60, width=960, height=540
     cameras = camera_path(camera, model, positions, width / height)
     start_renderer(headless=True, width=width, height=height)
     drawing = SceneDrawing(model, draw, positions[0])
+    bar = progress and sys.stderr.isatty()
+    if progress and not bar:
+        print(f"rendering {len(positions)} frames to {path}", flush=True)
     with FrameWriter(path, fps, width, height) as writer:
         for frame in tqdm(range(len(positions)), desc="rendering", unit="frame",
-                          disable=not progress):
+                          disable=not bar, file=sys.stderr):
             image = draw_frame(drawing, cameras[frame], positions[frame])
             writer.append(stamp_time(image, times[frame]))
     return writer.path

@@ -116,8 +116,9 @@ class WebReplay:
                          f"{t.duration:.3g} s")
         self.play_button = gui.add_button("Play")
         self.play_button.on_click(lambda _: self._toggle())
-        self.frame_slider = gui.add_slider("frame", 0, t.frame_count - 1, 1, 0)
-        self.frame_slider.on_update(lambda _: self._seek(self.frame_slider.value))
+        # numbered from 1 to the frame count, as the window's label says "frame 1 of N"
+        self.frame_slider = gui.add_slider("frame", 1, t.frame_count, 1, 1)
+        self.frame_slider.on_update(lambda _: self._seek(self.frame_slider.value - 1))
         self.speed = gui.add_dropdown("speed", [f"{s:g}x" for s in SPEEDS], initial_value="1x")
         self.speed.on_update(lambda _: t.set_speed(SPEEDS[[f"{s:g}x" for s in SPEEDS]
                                                           .index(self.speed.value)]))
@@ -170,8 +171,8 @@ class WebReplay:
                 if update is not None and getattr(self.draw, toggle):
                     update(positions)
             self.time_text.value = f"{self.take.time[frame]:.3f}"
-            if self.frame_slider.value != frame:
-                self.frame_slider.value = frame
+            if self.frame_slider.value != frame + 1:
+                self.frame_slider.value = frame + 1
         self._shown_frame = frame
 
     def tick(self) -> None:

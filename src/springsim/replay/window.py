@@ -71,9 +71,10 @@ class ReplayViewer:
             t.step(1)
         psim.SameLine()
         _, t.loop = psim.Checkbox("loop", t.loop)
-        changed, frame = psim.SliderInt("frame", t.frame, 0, t.frame_count - 1)
+        # numbered from 1, as the label below ("frame 114 of 481") and Blender number frames
+        changed, number = psim.SliderInt("frame", t.frame + 1, 1, t.frame_count)
         if changed:
-            t.seek(frame)
+            t.seek(number - 1)
         labels = [f"{speed:g}x" for speed in SPEEDS]
         current = SPEEDS.index(t.speed) if t.speed in SPEEDS else SPEEDS.index(1.0)
         changed, chosen = psim.Combo("speed", current, labels)

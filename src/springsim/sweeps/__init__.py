@@ -14,6 +14,7 @@ Worker processes are started with the ``spawn`` method, so a script that calls `
 more than one worker must do so under ``if __name__ == "__main__":``.
 """
 import os
+import sys
 import tempfile
 
 from ..errors import require
@@ -61,6 +62,9 @@ def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None 
     done = resume(table, specs, out) if table else {}
     rows = dict(done)
     pending = [spec for spec in specs if spec.index not in done]
+    if done and progress:
+        print(f"springsim sweep: {len(done)} of {len(specs)} runs are already in {table.path}; "
+              f"skipped them, running {len(pending)}", file=sys.stderr, flush=True)
     for spec, row in run_all(pending, workers, dask, out, progress):
         rows[spec.index] = row
         if table:

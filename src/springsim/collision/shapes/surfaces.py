@@ -16,41 +16,70 @@ from .settings import SurfaceContact
 
 
 def surface_contact_arrays(specs, built, offsets) -> dict:
-    """The ModelArrays entries of body-body contact (model.ModelArrays documents them)."""
-    particle_body = np.repeat(np.arange(len(built), dtype=np.int64), np.diff(offsets))
+    """The ModelArrays entries of body-body contact (model.ModelArrays documents them).
+
+    Contact tells bodies apart by ``particle_body``, which numbers *contact bodies*: each
+    connected piece of a body (particles joined by springs or surface edges) is one, so that the
+    separate parts of a mesh body, or two panels in one cloth file, collide with each other as
+    two bodies would; they share their body's settings."""
     settings = [spec if isinstance(spec, SurfaceContact) else None for spec in specs]
+    particle_body, owner = contact_bodies(settings, built, offsets)
     triangles = [collision_triangles(b) + start if s is not None else np.empty((0, 3), np.int64)
                  for s, b, start in zip(settings, built, offsets)]
-    touching = [s is not None and len(t) > 0 for s, t in zip(settings, triangles)]
-    selfish = [touch and s.self_collision for s, touch in zip(settings, touching)]
-    if sum(touching) < 2 and not any(selfish):
+    body_touches = np.array([s is not None and len(t) > 0 for s, t in zip(settings, triangles)])
+    touching = body_touches[owner]
+    selfish = [touch and settings[b].self_collision for b, touch in zip(owner, touching)]
+    if touching.sum() < 2 and not any(selfish):
         triangles, selfish = [np.empty((0, 3), np.int64)], [False]
-        touching = [False] * len(built)
-    all_triangles = np.concatenate([t for t, touch in zip(triangles, touching) if touch]
+        body_touches[:] = False
+        touching[:] = False
+    all_triangles = np.concatenate([t for t, touch in zip(triangles, body_touches) if touch]
                                    or [np.empty((0, 3), np.int64)])
-    edges = [triangle_edges(t) for t, touch in zip(triangles, touching) if touch]
+    edges = [triangle_edges(t) for t, touch in zip(triangles, body_touches) if touch]
 
     def per_body(name, default):
-        return np.array([getattr(s, name) if s is not None else default for s in settings],
-                        dtype=type(default))
+        values = [getattr(s, name) if s is not None else default for s in settings]
+        return np.array(values, dtype=type(default))[owner]
 
     all_edges = (np.concatenate(edges) if edges else np.empty((0, 2), np.int64)).astype(np.int64)
     neighbourhood = neighbour_arrays(all_edges, len(particle_body))
     # one self-colliding sheet: the pair search may be spared where it lies unfolded
     sheet = (unfolded_sheet_arrays(all_triangles, len(particle_body),
                                    neighbourhood["neighbour_start"], neighbourhood["neighbours"])
-             if sum(touching) == 1 and any(selfish) else no_sheet())
+             if touching.sum() == 1 and any(selfish) else no_sheet())
+    thickness = np.array([s.contact_thickness() if s is not None else 0.0 for s in settings])
     return {"particle_body": particle_body,
             "surface_points": np.unique(all_triangles).astype(np.int64),
             "surface_triangles": all_triangles.astype(np.int64),
             "surface_edges": all_edges,
             **neighbourhood, **sheet,
-            "body_thickness": np.array([s.contact_thickness() if s is not None else 0.0
-                                        for s in settings]),
+            "body_thickness": thickness[owner],
             "body_self_collision": per_body("self_collision", False),
             "body_friction": per_body("friction", 0.0),
             "body_static_friction": per_body("static_friction", 0.0),
             "body_restitution": per_body("restitution", 0.0)}
+
+
+def contact_bodies(settings, built, offsets) -> tuple[np.ndarray, np.ndarray]:
+    """(P,) each particle's contact body, and (C,) the body each contact body is a piece of:
+    a body that takes part in contact has one per connected piece, any other body one."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    labels, owner = [], []
+    for b, (spec, body) in enumerate(zip(settings, built)):
+        count = len(body.masses)
+        pieces, label = 1, np.zeros(count, np.int64)
+        if spec is not None and count:
+            links = np.concatenate([np.asarray(body.springs, np.int64).reshape(-1, 2),
+                                    triangle_edges(collision_triangles(body))])
+            graph = coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])),
+                               shape=(count, count))
+            pieces, label = connected_components(graph, directed=False)
+        labels.append(label.astype(np.int64) + len(owner))
+        owner += [b] * pieces
+    particle_body = np.concatenate(labels) if labels else np.empty(0, np.int64)
+    return particle_body, np.asarray(owner, np.int64)
 
 
 def neighbour_arrays(edges: np.ndarray, particle_count: int) -> dict:

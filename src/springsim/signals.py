@@ -1,0 +1,138 @@
+"""Ctrl-C (SIGINT) and SIGTERM, acted on between compiled calls, never inside one.
+
+A Python signal handler runs at the next bytecode the main thread executes. While a Numba
+kernel runs that is usually the first bytecode after it returns, but a kernel that boxes its
+result (a tuple of arrays, a named tuple) or raises calls back into Python (Numba's
+unpickling), and a handler that raises there leaves an exception set under native code that
+ignores it: the process ends in ``SystemError: CPUDispatcher(...) returned a result with an
+exception set``, or a segmentation fault. So while ``deferred()`` is held (around each
+``Simulation.step``, whose state must change as a whole anyway) the handler only records the
+signal, and the block raises it as it ends. Everywhere else the handler raises at once, so a
+command waiting on workers, a file or ffmpeg stops as before. Compiling a kernel is Python
+called by Numba's dispatcher, which passes an exception on, so Ctrl-C during the first
+compile (minutes) stops it at once, inside ``deferred()`` too.
+
+SIGINT raises ``KeyboardInterrupt`` and SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so
+that every half-written file is removed on the way out (safe_files.py) and the command line
+prints one line and exits with 128 + the signal's number.
+"""
+import contextlib
+import os
+import signal
+import threading
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+RESEND_AFTER = 0.02   # s: a signal that landed in a Numba call-back outside deferred() is sent again
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every half-written file is removed on the way out."""
+
+
+_depth = 0          # how many deferred() blocks the main thread is in
+_pending = None     # the signal received inside them, acted on as the outermost one ends
+
+
+def exception_for(signum: int) -> KeyboardInterrupt:
+    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def on_signal(signum, frame):
+    """The handler: raise, unless the main thread is inside a compiled call (module doc)."""
+    global _pending
+    safe = _safe_to_raise(frame)
+    if safe:
+        raise exception_for(signum)
+    if _depth > 0:
+        _pending = _pending or signum
+        return
+    if safe is False:
+        # called back from C code outside deferred(): try again when it has returned
+        threading.Timer(RESEND_AFTER, os.kill, (os.getpid(), signum)).start()
+        return
+    raise exception_for(signum)
+
+
+def _frames(frame):
+    while frame is not None:
+        yield frame
+        frame = frame.f_back
+
+
+def _module(frame) -> str:
+    return frame.f_globals.get("__name__", "") or ""
+
+
+def _run_from_c(frame) -> bool:
+    """A string an extension runs with PyRun_String, under other Python code (``python -c``'s
+    own program is a "<string>" module too, but the outermost frame; its functions are not
+    modules)."""
+    code = frame.f_code
+    return (code.co_filename == "<string>" and code.co_name == "<module>"
+            and frame.f_back is not None)
+
+
+def _ignores_exceptions(frame) -> bool:
+    """A weakref callback or finalizer, or ``__del__``: Python prints "Exception ignored" and
+    goes on, so the signal would be lost (the import lock's weakref callback, for one)."""
+    code = frame.f_code
+    return (code.co_name == "__del__" or _module(frame) == "weakref"
+            or (code.co_name == "cb" and "importlib._bootstrap" in code.co_filename))
+
+
+def _safe_to_raise(frame) -> bool | None:
+    """False where the innermost code that matters was called back from code that drops an
+    exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
+    (raising there hung the compile), or a string run with PyRun_String by an extension
+    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit). True
+    where it is Numba's dispatcher compiling a kernel, which passes an exception on to its
+    caller. None elsewhere: plain Python."""
+    for each in _frames(frame):
+        module = _module(each)
+        if (module == "numba.core.serialize" or module.startswith("llvmlite")
+                or _run_from_c(each) or _ignores_exceptions(each)):
+            return False
+        if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
+            return True
+    return None
+
+
+@contextlib.contextmanager
+def handled():
+    """While the block runs (a command), SIGINT and SIGTERM go to ``on_signal`` (in the main
+    thread only: elsewhere Python cannot install handlers, and the caller keeps its own)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signum: signal.signal(signum, on_signal) for signum in SIGNALS}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
+def deferred():
+    """A block of compiled calls: a signal received in it is raised as it ends (module doc).
+
+    Outside ``handled()`` (springsim used from Python), Python's own Ctrl-C handler is swapped
+    for ``on_signal`` for the block, so Ctrl-C in a session stops a long ``advance`` cleanly too.
+    """
+    global _depth, _pending
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    swapped = _depth == 0 and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if swapped:
+        signal.signal(signal.SIGINT, on_signal)
+    _depth += 1
+    try:
+        yield
+    finally:
+        _depth -= 1
+        if swapped:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        if _depth == 0 and _pending is not None:
+            signum, _pending = _pending, None
+            raise exception_for(signum)
