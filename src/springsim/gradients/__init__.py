@@ -85,7 +85,7 @@ def run_gradient(simulation, loss, duration: float, memory_limit=DEFAULT_MEMORY_
         raise SceneError("loss", value, "must be a finite number with a finite gradient "
                          "(the loss returned NaN or infinity)")
     physical = Physical.of(simulation.model)
-    adjoint = ADJOINTS[simulation.integrator.name](simulation.integrator)
+    adjoint = ADJOINTS[simulation.integrator.name](simulation.integrator, simulation.model)
     x0_bar, v0_bar, bar = backward(simulation, adjoint, physical, tape, frame_steps, frame_bars,
                                      contact_check(simulation))
     # a pinned particle never moves: its initial velocity is zeroed by the model

@@ -6,12 +6,17 @@ name (``@register_adjoint``). Each mirrors its method's step (integrators/) line
 reverse, so the gradient is of the arithmetic the simulation did, not of the differential
 equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)`` takes the
 recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
-start. Contact is not in these steps: the caller refuses scenes with any (gradients/checks.py).
+start. The explicit methods' terrain contact (planes: contact.py) is in their force evaluations
+and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
+in NumPy from the step's start to know what it did.
 """
 import numpy as np
 
-from .physics import accelerations, accelerations_vjp
-from .solve import newton_estimates, system_vjp_iteration
+from .contact import far_from_planes, impacts, impacts_vjp
+from .kernels import rk4_step_vjp
+from .physics import step_accelerations, step_accelerations_vjp
+from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
+from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 
 ADJOINTS: dict[str, type] = {}
 
@@ -24,72 +29,119 @@ def register_adjoint(cls):
 class Adjoint:
     name = ""
 
-    def __init__(self, integrator):
+    def __init__(self, integrator, model):
         self.integrator = integrator
+        self.model = model
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         raise NotImplementedError   # every registered adjoint overrides this
 
 
+class ExplicitAdjoint(Adjoint):
+    """An explicit method: its update (``update``, with what each force evaluation's contact
+    did), then the impact pass; the adjoint goes back through both."""
+
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+        x, v = start
+        x_new, v_new, stages = self.update(physical, h, x, v)
+        if len(physical.friction):
+            _, _, found = impacts(physical, x_new, v_new)
+            x_bar, v_bar = impacts_vjp(physical, found, x_bar.copy(), v_bar.copy(), bar)
+        return self.update_vjp(physical, h, x, v, stages, x_bar, v_bar, bar)
+
+
 @register_adjoint
-class SymplecticEulerAdjoint(Adjoint):
+class SymplecticEulerAdjoint(ExplicitAdjoint):
     """v' = v + h a(x, v), x' = x + h v'."""
 
     name = "symplectic_euler"
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
+    def update(self, physical, h, x, v):
+        a, touches = step_accelerations(physical, x, v, h)
+        v_new = v + h * a
+        return x + h * v_new, v_new, touches
+
+    def update_vjp(self, physical, h, x, v, touches, x_bar, v_bar, bar):
         v_new_bar = v_bar + h * x_bar
         a_bar = h * v_new_bar
         x_bar, v_bar = x_bar.copy(), v_new_bar.copy()
-        accelerations_vjp(physical, x, v, a_bar, x_bar, v_bar, bar)
+        step_accelerations_vjp(physical, x, v, h, touches, a_bar, x_bar, v_bar, bar)
         return x_bar, v_bar
 
 
 @register_adjoint
-class ExplicitEulerAdjoint(Adjoint):
+class ExplicitEulerAdjoint(ExplicitAdjoint):
     """x' = x + h v, v' = v + h a(x, v)."""
 
     name = "explicit_euler"
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
+    def update(self, physical, h, x, v):
+        a, touches = step_accelerations(physical, x, v, h)
+        return x + h * v, v + h * a, touches
+
+    def update_vjp(self, physical, h, x, v, touches, x_bar, v_bar, bar):
         a_bar = h * v_bar
         x_bar, v_bar = x_bar.copy(), v_bar + h * x_bar
-        accelerations_vjp(physical, x, v, a_bar, x_bar, v_bar, bar)
+        step_accelerations_vjp(physical, x, v, h, touches, a_bar, x_bar, v_bar, bar)
         return x_bar, v_bar
 
 
 @register_adjoint
-class RK4Adjoint(Adjoint):
+class RK4Adjoint(ExplicitAdjoint):
     """integrators/rk4.py: stages (x_k, v_k), slopes (v_k, a(x_k, v_k)),
         x' = x + h/6 (v + 2 v2 + 2 v3 + v4),  v' = v + h/6 (a1 + 2 a2 + 2 a3 + a4),
-    with (x2, v2) = y + h/2 k1, (x3, v3) = y + h/2 k2, (x4, v4) = y + h k3."""
+    with (x2, v2) = y + h/2 k1, (x3, v3) = y + h/2 k2, (x4, v4) = y + h k3. Every stage's
+    contact is at the whole step h, as the forward's."""
 
     name = "rk4"
+    work = None
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
-        a1 = accelerations(physical, x, v)
+        if not far_from_planes(physical, h, start, end):
+            return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
+        x, v = start[0], start[1]
+        if self.work is None or self.work.shape[1] != len(x):
+            self.work = np.empty((17, len(x), 3))
+        x_bar, v_bar = x_bar.copy(), v_bar.copy()
+        rk4_step_vjp((physical.a, physical.b, physical.ks, physical.kd, physical.rest),
+                     (physical.inv_mass, physical.drag, physical.gravity), h, x, v, x_bar,
+                     v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity),
+                     self.work)
+        return x_bar, v_bar
+
+    def update(self, physical, h, x, v):
+        a1, t1 = step_accelerations(physical, x, v, h)
         x2, v2 = x + h / 2 * v, v + h / 2 * a1
-        a2 = accelerations(physical, x2, v2)
+        a2, t2 = step_accelerations(physical, x2, v2, h)
         x3, v3 = x + h / 2 * v2, v + h / 2 * a2
-        a3 = accelerations(physical, x3, v3)
+        a3, t3 = step_accelerations(physical, x3, v3, h)
         x4, v4 = x + h * v3, v + h * a3
+        a4, t4 = step_accelerations(physical, x4, v4, h)
+        stages = ((x2, v2, t2), (x3, v3, t3), (x4, v4, t4), t1)
+        if not len(physical.friction):   # no impact pass: the end state is not needed
+            return None, None, stages
+        # the forward's arithmetic order (rk4.first_stage .. last_stage)
+        dx = v + 2.0 * v2 + 2.0 * v3
+        dv = a1 + 2.0 * a2 + 2.0 * a3
+        return x + h / 6 * (dx + v4), v + h / 6 * (dv + a4), stages
+
+    def update_vjp(self, physical, h, x, v, stages, x_bar, v_bar, bar):
+        (x2, v2, t2), (x3, v3, t3), (x4, v4, t4), t1 = stages
         out_x, out_v = x_bar.copy(), v_bar.copy()   # y' = y + ...
         # Backwards through the stages: stage k's state is y + step (v_{k-1}, a_{k-1}) and its
         # slope (v_k, a_k) enters y' with ``weight``; what flows into stage k-1's velocity and
         # acceleration is carried to the next pass.
         v_carry, a_carry = np.zeros_like(x), np.zeros_like(x)
-        for xk, vk, step, weight in ((x4, v4, h, h / 6), (x3, v3, h / 2, h / 3),
-                                     (x2, v2, h / 2, h / 3)):
+        for xk, vk, tk, step, weight in ((x4, v4, t4, h, h / 6), (x3, v3, t3, h / 2, h / 3),
+                                         (x2, v2, t2, h / 2, h / 3)):
             xk_bar, vk_bar = np.zeros_like(x), weight * x_bar + v_carry
-            accelerations_vjp(physical, xk, vk, weight * v_bar + a_carry, xk_bar, vk_bar, bar)
+            step_accelerations_vjp(physical, xk, vk, h, tk, weight * v_bar + a_carry, xk_bar,
+                                   vk_bar, bar)
             out_x += xk_bar
             out_v += vk_bar
             v_carry, a_carry = step * xk_bar, step * vk_bar
         out_v += h / 6 * x_bar + v_carry           # stage 1 is y itself
-        accelerations_vjp(physical, x, v, h / 6 * v_bar + a_carry, out_x, out_v, bar)
+        step_accelerations_vjp(physical, x, v, h, t1, h / 6 * v_bar + a_carry, out_x, out_v, bar)
         return out_x, out_v
 
 
@@ -105,15 +157,26 @@ class ImplicitEulerAdjoint(Adjoint):
     the simulation computed (v' - v - dv_{K-1}); earlier ones are solved again here, tightly."""
 
     name = "implicit_euler"
+    carried_bar = None   # the cotangent of the friction dampers carried into the step after
+    solver = None        # solve.ForwardSolver, made on first use
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
+        x, v = start[0], start[1]
         iterations = self.integrator.newton_iterations
-        estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations,
-                                     self.integrator.cg_tolerance)
+        if len(start) == 3 and touches_planes(physical, h, start, end):
+            kind, terrain, dampers = start[2]
+            carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
+            _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
+            x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,
+                                                             v_bar, carried, bar)
+            return x_bar, v_bar
+        self.carried_bar = None   # a step without contacts leaves no damper behind
+        if self.solver is None:
+            self.solver = ForwardSolver(self.model, self.integrator)
+        estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations, self.solver)
         dv_bar = v_bar + h * x_bar
         x_bar, v_bar = x_bar.copy(), dv_bar.copy()
         for k in reversed(range(iterations)):
             dv_bar = system_vjp_iteration(physical, h, x, v, estimates[k], estimates[k + 1],
-                                          k == 0, dv_bar, x_bar, v_bar, bar)
+                                          k == 0, dv_bar, x_bar, v_bar, bar, self.solver)
         return x_bar, v_bar

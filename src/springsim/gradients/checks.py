@@ -2,9 +2,11 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag and pins. Not yet covered: terrain contact, body-body and ball contact.
-A scene may have terrains as long as no particle comes within a terrain's contact band during
-the run; one that does is refused rather than given a gradient that leaves contact out.
+dampers, gravity, drag and pins; contact with planes (contact.py, implicit_contact.py).
+Not yet covered: contact with curved terrains (spheres, bowls, meshes), body-body and ball
+contact. A terrain the adjoint does not follow may be in the
+scene as long as no particle comes within its contact band during the run; one that does is
+refused rather than given a gradient that leaves contact out.
 """
 import numpy as np
 
@@ -36,23 +38,28 @@ def contact_check(simulation):
     """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
     a terrain's contact band (or would be within the step, as implicit_euler's constraints look
     ahead); None without terrains. The backward pass calls it on every step's start."""
+    from ..terrains import Plane
+
     model = simulation.model
-    if not model.terrains:
+    followed = [isinstance(terrain, Plane) for terrain in model.terrains]
+    if all(followed):
         return None
     radii = model.arrays.terrain_offset
     h = simulation.dt
 
     def check(step, state):
-        x, v = state
+        x, v = state[0], state[1]
         for t, terrain in enumerate(model.terrains):
+            if followed[t]:
+                continue
             phi = terrain.signed_distance(x, radii)
             reach = phi + h * np.minimum(_normal_speed(terrain, x, v, radii), 0.0)
             touching = (np.minimum(phi, reach) < model.arrays.terrain_epsilon[t]) & ~model.pinned
             if touching.any():
                 raise SceneError(f"terrains.{t}", type(terrain).__name__,
                                  f"is touched at step {step} (particle "
-                                 f"{int(np.argmax(touching))}): gradients through terrain "
-                                 "contact are not supported yet")
+                                 f"{int(np.argmax(touching))}): gradients follow contact with "
+                                 "planes only")
     return check
 
 

@@ -11,10 +11,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from ..errors import SceneError
+from ..errors import SceneError, SimulationDiverged
 from . import prepare, run_gradient
 
 BOUND_FACTOR = 1000.0
+DIVERGED_LOSS = 1e6   # the loss (over the starting loss) of trial values whose run blows up
 POSITIVE_WORDS = ("ks", "kd", "mass", "masses", "particle_mass", "drag", "rest_lengths",
                   "stiffness_field", "spring_ks", "spring_kd")
 
@@ -33,7 +34,7 @@ class FitResult:
 
 
 def is_positive(name: str) -> bool:
-    return name.split(".")[-1] in POSITIVE_WORDS
+    return name.split(".")[-1] in POSITIVE_WORDS or ".stiffness_regions." in name
 
 
 def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_iterations=50,
@@ -74,7 +75,15 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
         values = unpack(z)
         fitted_scene, simulation, fitted = prepare(scene, wrt, values, integrator, dt, duration,
                                                    threads, **integrator_options)
-        result = run_gradient(simulation, loss, duration)
+        try:
+            result = run_gradient(simulation, loss, duration)
+        except SimulationDiverged:
+            if "start" not in scale:
+                raise   # the starting values themselves blow up: say so
+            # a trial step too far (an explicit method's springs too stiff for its dt): a loss
+            # far above the start's makes the line search step back
+            evaluations[0] += 1
+            return DIVERGED_LOSS, np.zeros_like(z)
         evaluations[0] += 1
         grads = []
         for p in fitted:

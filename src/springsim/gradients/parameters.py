@@ -15,7 +15,12 @@ Two kinds, an open set (``parameter`` tries each kind in PARAMETER_KINDS):
   (S,), and ``bodies.N.stiffness_field``, a scale on each spring of body N (1: the scene's ks).
   Setting rest lengths does not move the initial positions, and setting initial positions does
   not change rest lengths (the model's, built from the scene's positions, stay).
+  ``bodies.N.stiffness_regions.AXIS=CUT[,CUT...]`` is the same scale, one per region: the
+  regions are the slabs between the cuts (m) along AXIS (x, y or z), a spring in the slab its
+  midpoint lies in at the model's initial positions. ``bodies.0.stiffness_regions.x=0`` is two
+  numbers: the springs of body 0 left of x = 0, and those right of it.
 """
+import re
 import dataclasses
 
 import numpy as np
@@ -27,8 +32,11 @@ from .physics import Physical
 
 # the model arrays that the adjoint covers (Physical) and that a SceneValue may change
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
-           "spring_runs", "run_rest_length", "loose_springs"}
+           "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
+           "terrain_restitution"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
+# Physical's fields with a cotangent (physics.Cotangents), which a SceneValue's tangents cover
+DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution")
 
 
 def parameter(scene, name):
@@ -41,7 +49,8 @@ def parameter(scene, name):
             return found
     raise SceneError("wrt", name, "names no parameter: give a numeric scene key "
                      "(bodies.0.structural.ks, gravity, drag, ...) or one of "
-                     + ", ".join(ModelArray.NAMES) + ", bodies.N.stiffness_field")
+                     + ", ".join(ModelArray.NAMES) + ", bodies.N.stiffness_field, "
+                     "bodies.N.stiffness_regions.AXIS=CUTS")
 
 
 class SceneValue:
@@ -94,16 +103,15 @@ class SceneValue:
                 built.append(changed)
             span = taken[0] - taken[1]   # the step the values took, rounding included
             plus, minus = Physical.of(built[0]), Physical.of(built[1])
-            out.append(((plus.ks - minus.ks) / span, (plus.kd - minus.kd) / span,
-                        (plus.rest - minus.rest) / span, (plus.mass - minus.mass) / span,
-                        (plus.drag - minus.drag) / span, (plus.gravity - minus.gravity) / span,
-                        (built[0].initial_positions - built[1].initial_positions) / span,
-                        (built[0].initial_velocities - built[1].initial_velocities) / span))
+            out.append(tuple((getattr(plus, name) - getattr(minus, name)) / span
+                             for name in DIFFERENTIABLE)
+                       + ((built[0].initial_positions - built[1].initial_positions) / span,
+                          (built[0].initial_velocities - built[1].initial_velocities) / span))
         return out
 
     def gradient(self, scene, model, result):
-        bars = (result.bar.ks, result.bar.kd, result.bar.rest, result.bar.mass, result.bar.drag,
-                result.bar.gravity, result.x0_bar, result.v0_bar)
+        bars = tuple(getattr(result.bar, name) for name in DIFFERENTIABLE) + (result.x0_bar,
+                                                                               result.v0_bar)
         grad = [sum(float(np.sum(b * t)) for b, t in zip(bars, tangent))
                 for tangent in self.tangents(scene, model)]
         return float(grad[0]) if self.shape == () else np.array(grad).reshape(self.shape)
@@ -150,6 +158,22 @@ class ModelArray:
         parts = name.split(".")
         if name in cls.NAMES:
             return cls(name, name)
+        regions = re.fullmatch(r"bodies\.(\d+)\.stiffness_regions\.([xyz])=(.+)", name)
+        if regions:
+            body = int(regions.group(1))
+            if body >= len(scene.bodies):
+                raise SceneError("wrt", name, f"names no body: the scene has bodies 0 to "
+                                 f"{len(scene.bodies) - 1}")
+            try:
+                cuts = np.array(sorted(float(c) for c in regions.group(3).split(",")))
+            except ValueError:
+                cuts = np.array([np.nan])
+            if not np.all(np.isfinite(cuts)):
+                raise SceneError("wrt", name, "must end in AXIS=CUT[,CUT...], the cuts numbers "
+                                 "(m): bodies.0.stiffness_regions.x=0")
+            found = cls(name, "stiffness_regions", body)
+            found.axis, found.cuts = "xyz".index(regions.group(2)), cuts
+            return found
         if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "stiffness_field":
             if not (parts[1].isdigit() and int(parts[1]) < len(scene.bodies)):
                 raise SceneError("wrt", name, f"names no body: the scene has bodies 0 to "
@@ -178,11 +202,27 @@ class ModelArray:
             return arrays.group_ks[arrays.spring_group].astype(float)
         if self.kind == "spring_kd":
             return arrays.group_kd[arrays.spring_group].astype(float)
+        if self.kind == "stiffness_regions":
+            return np.ones(len(self.cuts) + 1)
         return np.ones(int(self.body_springs(model).sum()))   # stiffness_field: the scene's
+
+    def region_of_springs(self, model):
+        """The region of each of the body's springs (stiffness_regions): the slab its midpoint
+        lies in, at the model's initial positions."""
+        springs = model.arrays.springs[self.body_springs(model)].astype(np.int64)
+        x = model.initial_positions
+        middle = 0.5 * (x[springs[:, 0], self.axis] + x[springs[:, 1], self.axis])
+        return np.searchsorted(self.cuts, middle, side="right")
+
+    def current(self, model):
+        """The scale this parameter last set (``apply``), or the scene's: 1."""
+        applied = getattr(self, "applied", None)
+        return self.read(model) if applied is None else applied
 
     def apply(self, model, value):
         """The model with this array set to ``value`` (the initial state is the model's)."""
         value = np.asarray(value, float)
+        self.applied = value.copy()
         arrays = model.arrays
         current = self.read(model)
         if value.shape != current.shape:
@@ -206,6 +246,9 @@ class ModelArray:
             ks = value
         elif self.kind == "spring_kd":
             kd = value
+        elif self.kind == "stiffness_regions":
+            ks = ks.copy()
+            ks[self.body_springs(model)] *= value[self.region_of_springs(model)]
         else:
             ks = ks.copy()
             ks[self.body_springs(model)] *= value
@@ -227,7 +270,12 @@ class ModelArray:
             return bar.kd.copy()
         members = self.body_springs(model)
         ks = model.arrays.group_ks[model.arrays.spring_group].astype(float)
-        return (bar.ks * ks)[members]
+        # ks = scale times the scene's ks: d ks / d scale = ks / scale at the scale applied
+        if self.kind == "stiffness_regions":
+            regions = self.region_of_springs(model)
+            per_spring = (bar.ks * ks)[members] / self.current(model)[regions]
+            return np.bincount(regions, weights=per_spring, minlength=len(self.cuts) + 1)
+        return (bar.ks * ks)[members] / self.current(model)
 
 
 def regrouped(model, ks, kd):

@@ -20,6 +20,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import kernels
+from .contact import Planes, contact_accelerations, contact_accelerations_vjp
+
 
 class Physical(NamedTuple):
     """The differentiable numbers of a model, one per spring or particle."""
@@ -33,6 +36,9 @@ class Physical(NamedTuple):
     free: np.ndarray      # (P,) bool: not pinned
     a: np.ndarray         # (S,) the springs' first particles
     b: np.ndarray         # (S,) and second
+    friction: np.ndarray      # (T,) the terrains' Coulomb friction
+    restitution: np.ndarray   # (T,) and restitution
+    planes: Planes            # the terrains as contact needs them (contact.py)
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -42,7 +48,9 @@ class Physical(NamedTuple):
                    arrays.rest_length.astype(float), model.mass.astype(float),
                    arrays.drag.astype(float), arrays.gravity.astype(float),
                    arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
-                   arrays.springs[:, 1].astype(np.int64))
+                   arrays.springs[:, 1].astype(np.int64),
+                   arrays.terrain_friction.astype(float),
+                   arrays.terrain_restitution.astype(float), Planes.of(model))
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -65,6 +73,8 @@ class Cotangents:
     mass: np.ndarray
     drag: np.ndarray
     gravity: np.ndarray
+    friction: np.ndarray
+    restitution: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
@@ -121,7 +131,8 @@ def spring_forces(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarra
     return force
 
 
-def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+def reference_spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar,
+                                bar: Cotangents) -> None:
     """Add g . d(spring_forces)/d(x, v, ks, kd, r) into x_bar, v_bar and bar."""
     springs = geometry(physical, x)
     l, length = springs.unit, springs.length
@@ -162,6 +173,23 @@ def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
 
 
+def step_accelerations(physical: Physical, x, v, h):
+    """(dv/dt with terrain contact, what contact did): forces.accelerations at step h."""
+    a = accelerations(physical, x, v)
+    if not len(physical.friction):
+        return a, []
+    return contact_accelerations(physical, x, v, h, a)
+
+
+def step_accelerations_vjp(physical: Physical, x, v, h, touches, g, x_bar, v_bar,
+                           bar: Cotangents) -> None:
+    """Add g . d(step_accelerations)/d(everything) into x_bar, v_bar and bar; ``touches`` is
+    what step_accelerations returned second for the same (x, v)."""
+    if touches:
+        g = contact_accelerations_vjp(physical, h, touches, g, v_bar, bar)
+    accelerations_vjp(physical, x, v, g, x_bar, v_bar, bar)
+
+
 # --- the implicit system (implicit/jacobian.py) -------------------------------------------------
 
 def stiffness_coefficients(physical: Physical, springs: Springs):
@@ -174,7 +202,8 @@ def stiffness_coefficients(physical: Physical, springs: Springs):
             np.where(stretched, -physical.ks * springs.inverse, 0.0), ratio)
 
 
-def stiffness_product(physical: Physical, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+def reference_stiffness_product(physical: Physical, x: np.ndarray,
+                                u: np.ndarray) -> np.ndarray:
     """(dF/dx) u at x, clamped as the matrix is (jacobian.add_stiffness_product)."""
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -186,7 +215,8 @@ def stiffness_product(physical: Physical, x: np.ndarray, u: np.ndarray) -> np.nd
     return out
 
 
-def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
+def reference_stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar,
+                                    bar: Cotangents) -> None:
     """Add g . d[(dF/dx)(x) u]/d(x, u, ks, r) into x_bar, u_bar and bar."""
     springs = geometry(physical, x)
     along, across, across_dl, across_dr, ratio = stiffness_coefficients(physical, springs)
@@ -195,7 +225,8 @@ def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotang
     lu, lg = dot(l, us), dot(l, gs)
     # out_a = -(ks P(u) + across (u - P(u))), P(u) = (l . u) l
     sideways = dot(gs, us) - lu * lg    # g . (u - P(u))
-    d_bar = -(along[:, None] * projection_vjp(springs, us, gs) + (across_dl * sideways)[:, None] * l)
+    d_bar = -(along[:, None] * projection_vjp(springs, us, gs)
+              + (across_dl * sideways)[:, None] * l)
     scatter(physical, d_bar, x_bar)
     scatter(physical, -(physical.ks * lg)[:, None] * l - across[:, None] * (gs - lg[:, None] * l),
             u_bar)
@@ -217,7 +248,8 @@ def system_product(physical: Physical, x: np.ndarray, u: np.ndarray, h: float) -
     return out
 
 
-def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
+def reference_system_product_vjp(physical: Physical, x, u, g, h, x_bar,
+                                 bar: Cotangents) -> None:
     """Add g . d(A(x) u)/d(x, ks, kd, r, mass, drag), u held fixed, into x_bar and bar."""
     bar.mass += np.where(physical.free, dot(g, u), 0.0)
     bar.drag += h * dot(g, u)
@@ -231,3 +263,38 @@ def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -
     stiffness_product_vjp(physical, x, u, -h * h * g, x_bar, u_scratch, bar)
     d_bar = h * physical.kd[:, None] * projection_vjp(springs, us, gs)
     scatter(physical, d_bar, x_bar)
+
+
+# --- the same through the kernels (kernels.py): what the adjoints call --------------------------
+
+def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
+    """reference_spring_forces_vjp, in a kernel."""
+    kernels.add_spring_forces_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                  physical.rest, x, v, np.ascontiguousarray(g), x_bar, v_bar,
+                                  bar.ks, bar.kd, bar.rest)
+
+
+def stiffness_product(physical: Physical, x, u) -> np.ndarray:
+    """reference_stiffness_product, in a kernel."""
+    out = np.zeros_like(x)
+    kernels.add_stiffness_product(physical.a, physical.b, physical.ks, physical.rest, x,
+                                  np.ascontiguousarray(u), 1.0, out)
+    return out
+
+
+def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
+    """reference_stiffness_product_vjp, in a kernel."""
+    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                   physical.rest, x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), 0.0, 1.0, 0.0, x_bar, u_bar, bar.ks,
+                                   bar.kd, bar.rest)
+
+
+def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
+    """reference_system_product_vjp, the springs in a kernel."""
+    bar.mass += np.where(physical.free, dot(g, u), 0.0)
+    bar.drag += h * dot(g, u)
+    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
+                                   physical.rest, x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), h, -h * h, h, x_bar,
+                                   np.empty((0, 3)), bar.ks, bar.kd, bar.rest)

@@ -1,12 +1,13 @@
 """Backward Euler's Newton iterations, solved again where the adjoint needs them, and the adjoint
 of one iteration (adjoints.ImplicitEulerAdjoint).
 
-The linear solves here are on the free particles only (a pinned particle's rows are filtered out
-of the forward solve: implicit/constraints.py), with the same matrix A = M + h c - h dF/dv
-- h^2 dF/dx (clamped: physics.system_product) assembled as a sparse matrix. They are solved to
-ADJOINT_TOLERANCE, far below the forward's CG tolerance: the adjoint is the derivative of the
-linearized step, treating the forward solve as exact (its CG residual is the gradient's error,
-of the tolerance's order).
+A step without contact solves with the forward's own matrix and CG (``ForwardSolver``): the
+pinned particles' rows filtered out as in the forward, A = M + h c - h dF/dv - h^2 dF/dx
+(clamped), the forward's tolerance. The adjoint is the derivative of the linearized step,
+treating the forward's solves as exact: the CG residuals are the gradient's error, of the
+tolerance's order. A step with terrain contact (implicit_contact.py) assembles A as a sparse
+matrix (``system_matrix``) and solves its reduced systems directly (``solve_reduced``: sparse LU
+up to DIRECT_LIMIT unknowns, CG to ADJOINT_TOLERANCE beyond).
 """
 import numpy as np
 from scipy import sparse
@@ -24,6 +25,52 @@ from .physics import (
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
 DIRECT_LIMIT = 6000         # unknowns up to which a sparse LU solves (exact, and quick there)
+
+
+class ForwardSolver:
+    """The forward's own matrix and solve for the adjoint's systems: the block pattern, the
+    assembly and the filtered, block-Jacobi-preconditioned CG of implicit/ (cg.contact_cg), so
+    that the adjoint solves with the very matrix the step solved with, as fast. It stops at the
+    forward's tolerance: the forward's own solves leave an error of that order in the gradient
+    already (docs/guide/gradients.md measures both)."""
+
+    def __init__(self, model, integrator):
+        from ..collision.contact_sets.solve import no_contacts
+        from ..implicit.constraints import FREE, PINNED
+        from ..implicit.spring_terms import spring_terms_like
+
+        self.arrays = model.arrays
+        self.layout = layout = integrator.pattern(model)
+        count = model.particle_count
+        x = np.zeros((count, 3))
+        self.blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
+        self.terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
+        self.contacts = no_contacts()
+        self.kind = np.where(model.pinned, PINNED, FREE).astype(np.int8)
+        self.normal = np.zeros((count, 3))
+        self.work = [np.zeros((count, 3)) for _ in range(4)]
+        self.tolerance = integrator.cg_tolerance
+        self.max_iterations = integrator.cg_max_iterations
+        self.iterations = 0   # CG iterations, for diagnostics
+
+    def assemble(self, x, h):
+        """The system matrix A at positions x (kept for ``solve``)."""
+        from ..implicit.jacobian import assemble_diagonal_and_terms
+
+        assemble_diagonal_and_terms(self.arrays, self.layout.diagonal, x, 1.0, h, h * h,
+                                    self.blocks, self.terms)
+
+    def solve(self, rhs):
+        """u with A u = rhs on the free particles (zero on the pinned ones)."""
+        from ..implicit.cg import contact_cg
+
+        u = np.zeros_like(rhs)
+        r, s, c, q = self.work
+        done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, self.contacts,
+                             np.ascontiguousarray(rhs), self.kind, self.normal, u, self.tolerance,
+                             self.max_iterations, 0.0, r, s, c, q)
+        self.iterations += done
+        return u
 
 
 def system_matrix(physical, x, h):
@@ -54,23 +101,34 @@ def system_matrix(physical, x, h):
     return matrix.tocsr()
 
 
-def solve_free(physical, matrix, rhs):
-    """u with A u = rhs on the free particles' components, zero on the pinned ones."""
-    free = np.repeat(physical.free, 3)
-    reduced = matrix[free][:, free]
-    b = rhs.ravel()[free]
-    u = np.zeros(rhs.size)
+def solve_reduced(matrix, rhs, held, basis):
+    """u with Q^T (A u - rhs) = 0 and u = Q w + held: the components ``basis`` (Q, orthonormal
+    columns) spans solved, the others held (gradients/implicit_contact.py's constraints)."""
+    reduced = (basis.T @ matrix @ basis).tocsc()
+    b = basis.T @ (rhs.ravel() - matrix @ held.ravel())
     if not b.any():
-        return u.reshape(rhs.shape)
+        return held.copy()
     if b.size <= DIRECT_LIMIT:
-        u[free] = linalg.spsolve(reduced.tocsc(), b)
+        w = linalg.spsolve(reduced, b)
     else:
         diagonal = reduced.diagonal()
         preconditioner = linalg.LinearOperator(reduced.shape, matvec=lambda r: r / diagonal)
-        solution, _ = linalg.cg(reduced, b, rtol=ADJOINT_TOLERANCE, atol=0.0, maxiter=10 * b.size,
-                                M=preconditioner)
-        u[free] = solution
-    return u.reshape(rhs.shape)
+        w, _ = linalg.cg(reduced, b, rtol=ADJOINT_TOLERANCE, atol=0.0, maxiter=10 * b.size,
+                         M=preconditioner)
+    return (basis @ w).reshape(held.shape) + held
+
+
+def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar):
+    """Add lam . d(newton_rhs)/d(x, v, x_k, v_k, parameters), its -M dv term aside (the
+    caller's: it also takes dv's cotangent)."""
+    spring_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
+    free = physical.free
+    bar.gravity += h * (physical.mass[free, None] * lam[free]).sum(axis=0)
+    bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
+    bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
+    vk_bar -= h * physical.drag[:, None] * lam
+    if first:
+        stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
 
 
 def estimate(x, v, dv, h, first):
@@ -92,36 +150,32 @@ def newton_rhs(physical, h, x, v, dv, first):
     return rhs
 
 
-def newton_estimates(physical, h, x, v, dv_end, iterations, tolerance):
+def newton_estimates(physical, h, x, v, dv_end, iterations, solver):
     """[dv_0 = 0, dv_1, ..., dv_K = dv_end]: the velocity changes after each Newton iteration,
-    the last as the simulation computed it, the others solved again."""
+    the last as the simulation computed it, the others solved again (``solver``: a
+    ForwardSolver)."""
     dv = [np.zeros_like(x)]
     for k in range(iterations - 1):
         x_k, _ = estimate(x, v, dv[-1], h, k == 0)
         rhs = newton_rhs(physical, h, x, v, dv[-1], k == 0)
-        dv.append(dv[-1] + solve_free(physical, system_matrix(physical, x_k, h), rhs))
+        solver.assemble(x_k, h)
+        dv.append(dv[-1] + solver.solve(rhs))
     dv.append(dv_end)
     return dv
 
 
-def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v_bar, bar):
+def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v_bar, bar,
+                         solver):
     """The adjoint of dv_next = dv + A(x_k)^-1 r_k: adds the cotangents of x, v and the
     parameters, returns that of dv."""
     x_k, v_k = estimate(x, v, dv, h, first)
-    matrix = system_matrix(physical, x_k, h)
-    lam = solve_free(physical, matrix, dv_bar)          # A symmetric: A^-T = A^-1
+    solver.assemble(x_k, h)
+    lam = solver.solve(dv_bar)          # A symmetric: A^-T = A^-1
     ddv = dv_next - dv
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
     # r_k's share
-    spring_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
-    free = physical.free
-    bar.gravity += h * (physical.mass[free, None] * lam[free]).sum(axis=0)
-    bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
-    bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
-    vk_bar -= h * physical.drag[:, None] * lam
+    rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar)
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
-    if first:
-        stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
     x_bar += xk_bar

@@ -39,9 +39,26 @@ def plan_stride(steps: int, particles: int, memory_limit: int) -> int:
     return min(stride, max(steps, 1))
 
 
+def keeps_memory(simulation) -> bool:
+    """Whether the adjoint needs each step's contact memory: backward Euler's terrain contacts
+    carry their friction dampers from step to step (implicit_contact.py)."""
+    return simulation.integrator.name == "implicit_euler" and bool(simulation.model.terrains)
+
+
+def snapshot(state, memory: bool):
+    """(x, v) of a state, or (x, v, (kind, terrain, friction dampers)) with its memory."""
+    x, v = state.positions.copy(), state.velocities.copy()
+    if not memory:
+        return x, v
+    contacts = state.contacts
+    return x, v, (contacts.kind.copy(), contacts.terrain.copy(),
+                  contacts.friction_damping.copy())
+
+
 def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
     """Run ``steps`` steps; returns (the positions at frame_steps (F, P, 3), the Tape)."""
     particles = simulation.model.particle_count
+    memory = keeps_memory(simulation)
     stride = plan_stride(steps, particles, memory_limit)
     wanted = {int(s): k for k, s in enumerate(frame_steps)}
     frames = np.empty((len(frame_steps), particles, 3))
@@ -51,8 +68,8 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
         if n in wanted:
             frames[wanted[n]] = state.positions
         if stride == 1:
-            states.append((state.positions.copy(), state.velocities.copy()))
-            stored += particles * 48
+            states.append(snapshot(state, memory))
+            stored += particles * (65 if memory else 48)
         elif n % stride == 0 and n < steps:
             states.append(state.copy())
             stored += particles * 48
@@ -67,8 +84,9 @@ def stretch(simulation, tape: Tape, first: int):
     simulation.state = tape.states[first // tape.stride].copy()
     last = min(first + tape.stride, tape.steps)
     states = []
+    memory = keeps_memory(simulation)
     for n in range(first, last + 1):
-        states.append((simulation.state.positions.copy(), simulation.state.velocities.copy()))
+        states.append(snapshot(simulation.state, memory))
         if n < last:
             simulation.step(1)
     return states

@@ -1,0 +1,568 @@
+"""Backward Euler's step with terrain contact (planes), replayed in NumPy, and its adjoint.
+
+The forward (integrators/implicit_euler.py with implicit/constraints.py) holds each contact's
+normal velocity at a floor and lets it slide along the plane against a friction damper c (N s/m)
+that it chooses from the solve's own reaction impulses, a few passes a Newton iteration:
+
+    find_constraints          kind, normal, floor of every particle; c carried from the last step
+    per Newton iteration k:
+      assemble                A_k = (the springs' matrix at x_k) + c_i (I - n n^T) on contacts
+                              b_k = newton_rhs - c_i (I - n n^T) (v + dv)
+                              (first iteration: a carried c capped to the friction cone)
+      solve                   S (A ddv - b) = 0 with the contacts' normal components at their
+                              floors (z) and the pinned particles' at zero
+      update, solve again     R = A ddv - b: a contact with R . n < 0 is released, a free
+                              particle that the solve carries into a plane becomes a contact,
+                              every other contact's c is chosen anew (coulomb_damping); solved
+                              again while anything moved (at most MAX_CONTACT_UPDATES passes)
+      dv += ddv
+    end                       x' = x + h (v + dv); an impact's approach speed restored; the
+                              impact pass of every integrator (contact.impacts)
+
+``replay`` takes the same branches (which particles are contacts, released, capped, slide or
+hold, how many passes) and solves each linear system exactly; ``adjoint`` goes back through it:
+each solve's adjoint is one solve with the same filtered matrix, and every friction damper c is
+differentiated as the function of the last solve's impulses and velocities it is. The damper the
+step leaves (``c_out``) is carried into the next step's matrix, so the backward pass carries its
+cotangent from step to step (adjoints.ImplicitEulerAdjoint).
+
+The gradient is of the exactly solved step: the forward's CG stops at its tolerance, and the
+difference is of that order (docs/guide/gradients.md).
+"""
+from typing import NamedTuple
+
+import numpy as np
+from scipy import sparse
+
+from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
+from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
+from .contact import along, impacts, impacts_vjp, plane_distance
+from .physics import geometry, stiffness_coefficients, system_product_vjp
+from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
+
+# how each contact's floor came about (constraints.lowest_normal_velocity)
+FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO = 0, 1, 2
+# how a friction damper came about
+KEPT, CAPPED, SLIDING, HOLDING, RELEASED = 0, 1, 2, 3, 4
+
+
+class Constraints(NamedTuple):
+    kind: np.ndarray       # (P,) FREE, CONTACT, PINNED
+    terrain: np.ndarray    # (P,) the contact's plane or -1
+    normal: np.ndarray     # (P, 3)
+    floor: np.ndarray      # (P,) m/s
+    floor_case: np.ndarray
+
+
+def floor_of(phi, v_n, h, epsilon):
+    """lowest_normal_velocity for arrays: (floor, case)."""
+    outside = phi >= epsilon
+    gap = -np.maximum(phi, 0.0) / h
+    low = np.minimum(v_n, 0.0)
+    case = np.where(outside, FLOOR_GAP, np.where(low >= gap, np.where(v_n < 0.0, FLOOR_VELOCITY,
+                                                                       FLOOR_ZERO), FLOOR_GAP))
+    floor = np.where(outside, -phi / h, np.maximum(low, gap))
+    return floor, case
+
+
+def floor_vjp(physical, constraints, index, floor_bar, h, x_bar, v_bar):
+    """floor = -phi / h (FLOOR_GAP, phi > 0 or outside the band), v . n (FLOOR_VELOCITY), 0."""
+    n = constraints.normal[index]
+    case = constraints.floor_case[index]
+    g = floor_bar[index]
+    gap = np.where(case == FLOOR_GAP, -g / h, 0.0)   # phi = n . x - ... : d phi / dx = n
+    vel = np.where(case == FLOOR_VELOCITY, g, 0.0)
+    np.add.at(x_bar, index, gap[:, None] * n)
+    np.add.at(v_bar, index, vel[:, None] * n)
+
+
+def find_constraints(physical, x, v, h, previous_kind, previous_terrain):
+    """constraints.find_constraints for planes: (Constraints, whether each contact continues
+    the last step's, with the same plane)."""
+    planes = physical.planes
+    count = x.shape[0]
+    kind = np.where(physical.free, FREE, PINNED).astype(np.int64)
+    terrain = np.full(count, -1)
+    normal = np.zeros((count, 3))
+    phi_best, v_n_best = np.zeros(count), np.zeros(count)
+    earliest = np.full(count, np.inf)
+    for t in range(len(planes.epsilon)):
+        n = planes.normal[t]
+        phi, v_n = plane_distance(planes, t, x), along(v, n)
+        reached = phi + h * v_n
+        touching = ((phi < planes.epsilon[t]) | (reached < planes.epsilon[t])) & physical.free
+        better = touching & (reached < earliest)
+        terrain[better], earliest[better] = t, reached[better]
+        phi_best[better], v_n_best[better] = phi[better], v_n[better]
+        normal[better] = n
+    contact = terrain >= 0
+    kind[contact] = CONTACT
+    epsilon = planes.epsilon[np.maximum(terrain, 0)]
+    floor, case = floor_of(phi_best, v_n_best, h, epsilon)
+    floor[~contact] = 0.0
+    continues = contact & (previous_kind == CONTACT) & (previous_terrain == terrain)
+    return Constraints(kind, terrain, normal, floor, case), continues
+
+
+def touches_planes(physical, h, start, end) -> bool:
+    """Whether a step may have had terrain contacts: some free particle within a plane's reach
+    at its start (find_constraints' test) or within its band at its end (a contact made during
+    the step ends on its floor, in the band). Otherwise the step is the plain one
+    (solve.py), which is quicker."""
+    planes = physical.planes
+    (x, v), x_end = start[:2], end[0]
+    for t in range(len(planes.epsilon)):
+        if not planes.is_plane[t]:
+            continue
+        phi = plane_distance(planes, t, x)
+        reach = np.minimum(phi, phi + h * along(v, planes.normal[t]))
+        near = np.minimum(reach, plane_distance(planes, t, x_end))
+        if np.any(physical.free & (near < planes.epsilon[t])):
+            return True
+    return False
+
+
+def tangential(u, n):
+    """(I - n n^T) u per particle."""
+    return u - np.einsum("ij,ij->i", u, n)[:, None] * n
+
+
+def rowdot(u, w):
+    return np.einsum("ij,ij->i", u, w)
+
+
+class Solve(NamedTuple):
+    """One filtered solve of a Newton iteration, as ``adjoint`` needs it."""
+
+    kind: np.ndarray      # the constraints it had
+    c: np.ndarray         # (P,) the friction dampers in its matrix
+    ddv: np.ndarray       # (P, 3) its solution
+
+
+class Update(NamedTuple):
+    """One active-set pass: the dampers it chose, from the solve before it."""
+
+    index: np.ndarray     # contacts whose damper it chose (SLIDING or HOLDING)
+    case: np.ndarray
+    c_before: np.ndarray  # (P,)
+    slip: np.ndarray      # (len(index),) |u_t|
+    impulse: np.ndarray   # R . n
+    stiffness: np.ndarray
+    sliding: np.ndarray
+    released: np.ndarray  # contacts it released (c -> 0)
+    grown: np.ndarray     # free particles it made contacts (c = 0)
+
+
+class Iteration(NamedTuple):
+    dv: np.ndarray        # the estimate it starts from
+    first: bool
+    cap: tuple            # (index, c_in, slip, impulse, gap) of the carried dampers it capped
+    c_start: np.ndarray   # (P,) the dampers the matrix starts with (after any cap)
+    steps: list           # [Solve, Update, Solve, ..., (Update)] in order
+    c_end: np.ndarray     # the dampers it leaves
+
+
+class Replay(NamedTuple):
+    constraints: Constraints
+    continues: np.ndarray
+    iterations: list
+    restored: np.ndarray  # particles whose approach speed the end restored
+    impacts: list         # contact.impacts' record
+    end: tuple            # (x, v) before the impact pass
+
+
+def diagonal_blocks(physical, x_k, h):
+    """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag
+    and every spring's C = p l l^T + q I (physics.system_product)."""
+    springs = geometry(physical, x_k)
+    along_, across, _, _, _ = stiffness_coefficients(physical, springs)
+    real = springs.length > 0.0
+    p = (h * physical.kd + h * h * along_) * real
+    q = h * h * across * real
+    l = springs.unit
+    blocks = p[:, None, None] * l[:, :, None] * l[:, None, :] + q[:, None, None] * np.eye(3)
+    out = np.zeros((x_k.shape[0], 3, 3))
+    np.add.at(out, physical.a, blocks)
+    np.add.at(out, physical.b, blocks)
+    out += (physical.solve_mass + h * physical.drag)[:, None, None] * np.eye(3)
+    return out
+
+
+def held(constraints, kind, u0):
+    """z: the constrained components of ddv (hold_constrained): (floor - n . u0) n on contacts."""
+    z = np.zeros_like(u0)
+    contact = kind == CONTACT
+    gap = constraints.floor[contact] - rowdot(u0[contact], constraints.normal[contact])
+    z[contact] = gap[:, None] * constraints.normal[contact]
+    return z
+
+
+def friction_terms(kind, normal, c, u0):
+    """(the dampers' blocks as a sparse matrix, their share of b: -c (I - n n^T) u0)."""
+    on = (kind == CONTACT) & (c != 0.0)
+    blocks = np.zeros((len(c), 3, 3))
+    n = normal[on]
+    blocks[on] = c[on, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
+    matrix = sparse.block_diag(list(blocks), format="csr")
+    share = np.zeros_like(u0)
+    share[on] = -c[on, None] * tangential(u0[on], n)
+    return matrix, share
+
+
+def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterations):
+    """The step as the forward took it (module doc), each solve exact. Returns (x', v', the
+    dampers it leaves, Replay)."""
+    constraints, continues = find_constraints(physical, x, v, h, previous_kind, previous_terrain)
+    kind = constraints.kind.copy()
+    normal = constraints.normal.copy()
+    terrain = constraints.terrain.copy()
+    floor, floor_case = constraints.floor.copy(), constraints.floor_case.copy()
+    constraints = Constraints(kind, terrain, normal, floor, floor_case)   # grows in place
+    c = np.where(continues, c_memory, 0.0)
+    dv = np.zeros_like(x)
+    record = []
+    for k in range(iterations):
+        first = k == 0
+        x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
+        matrix = system_matrix(physical, x_k, h)
+        b_sp = newton_rhs(physical, h, x, v, dv, first)
+        u0 = v + dv
+        blocks = diagonal_blocks(physical, x_k, h)
+        cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
+        if first:   # remembered_friction_in_cone
+            *cap, lowered = capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c)
+            c = c.copy()
+            c[cap[0]] = lowered
+        c_start = c.copy()
+        steps = []
+        ddv = solve_step(physical, constraints, kind, matrix, b_sp, u0, c)
+        steps.append(Solve(kind.copy(), c.copy(), ddv))
+        for _ in range(MAX_CONTACT_UPDATES):
+            update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind, matrix,
+                                                  blocks, b_sp, u0, c, ddv)
+            steps.append(update)
+            moved = np.sum(np.abs(c_new[update.index] - c[update.index])
+                           * np.maximum(update.slip, SLIP_SPEED))
+            total = np.sum(physical.friction[terrain[update.index]] * update.impulse)
+            changed = grew or len(update.released) > 0
+            c = c_new
+            if not (changed or moved > FRICTION_SETTLED * total):
+                break
+            ddv = solve_step(physical, constraints, kind, matrix, b_sp, u0, c)
+            steps.append(Solve(kind.copy(), c.copy(), ddv))
+        record.append(Iteration(dv, first, cap, c_start, steps, c.copy()))
+        dv = dv + ddv
+    v_k = v + dv
+    x_end = x + h * v_k
+    # restore_impact_speeds
+    contact = np.nonzero(kind == CONTACT)[0]
+    n = normal[contact]
+    approach, end_n = rowdot(v[contact], n), rowdot(v_k[contact], n)
+    fl = floor[contact]
+    restore = (approach < fl) & ~(end_n > fl + 1e-12 * np.abs(fl) + 1e-12)
+    restored = contact[restore]
+    v_end = v_k.copy()
+    v_end[restored] += (approach[restore] - end_n[restore])[:, None] * n[restore]
+    x_out, v_out, found = impacts(physical, x_end, v_end)
+    return x_out, v_out, c, Replay(constraints, continues, record, restored, found,
+                                   (x_end, v_end))
+
+
+def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
+    """remembered_friction_in_cone: (index, c_in, slip, impulse, gap, c_capped) of the carried
+    dampers that would leave the friction cone, each lowered to Coulomb's impulse / slip."""
+    index = np.nonzero((kind == CONTACT) & (c != 0.0))[0]
+    n = constraints.normal[index]
+    gap = constraints.floor[index] - rowdot(u0[index], n)
+    slip = np.linalg.norm(tangential(u0[index], n), axis=1)
+    impulse = -rowdot(b_sp[index], n) + gap * np.einsum("ki,kij,kj->k", n, blocks[index], n)
+    coulomb = physical.friction[constraints.terrain[index]] * np.maximum(impulse, 0.0)
+    over = c[index] * slip > coulomb
+    index, slip, impulse, gap = index[over], slip[over], impulse[over], gap[over]
+    return index, c[index].copy(), slip, impulse, gap, np.where(
+        slip > 0.0, coulomb[over] / np.where(slip > 0.0, slip, 1.0), 0.0)
+
+
+def solve_step(physical, constraints, kind, matrix, b_sp, u0, c):
+    """ddv with S (A ddv - b) = 0 and its constrained components held (z)."""
+    friction, share = friction_terms(kind, constraints.normal, c, u0)
+    z = held(constraints, kind, u0)
+    a = matrix + friction
+    return solve_reduced(a, b_sp + share, z, basis(kind, constraints.normal))
+
+
+def basis(kind, normal):
+    """Q: orthonormal columns spanning the components no constraint fixes (3P, r)."""
+    rows, cols, values = [], [], []
+    column = 0
+    for i in range(len(kind)):
+        if kind[i] == FREE:
+            for c in range(3):
+                rows.append(3 * i + c)
+                cols.append(column)
+                values.append(1.0)
+                column += 1
+        elif kind[i] == CONTACT:
+            for t in tangents(normal[i]):
+                for c in range(3):
+                    rows.append(3 * i + c)
+                    cols.append(column)
+                    values.append(t[c])
+                column += 1
+    return sparse.csr_matrix((values, (rows, cols)), shape=(3 * len(kind), column))
+
+
+def tangents(n):
+    e = np.zeros(3)
+    e[np.argmin(np.abs(n))] = 1.0
+    t1 = np.cross(n, e)
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(n, t1)
+
+
+def update_contacts(physical, h, x, v, constraints, kind, matrix, blocks, b_sp, u0, c, ddv):
+    """constraints.update_contacts: (Update, the dampers after it, whether a contact was
+    added). ``kind`` and ``constraints`` grow in place as the forward's do."""
+    planes = physical.planes
+    reaction = (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp   # friction's share has no n part
+    u = u0 + ddv
+    c_new = c.copy()
+    index, cases, slips, impulses, stiffs, slides, released = [], [], [], [], [], [], []
+    grown = []
+    for i in range(len(kind)):
+        if kind[i] == PINNED:
+            continue
+        if kind[i] == FREE:
+            best, earliest = -1, np.inf
+            for t in range(len(planes.epsilon)):
+                n = planes.normal[t]
+                p = planes.point[t]
+                phi = ((x[i, 0] - p[0]) * n[0] + (x[i, 1] - p[1]) * n[1]
+                       + (x[i, 2] - p[2]) * n[2] - planes.offset[i])
+                reached = phi + h * (u[i, 0] * n[0] + u[i, 1] * n[1] + u[i, 2] * n[2])
+                if reached < 0.0 and reached < earliest:
+                    best, earliest, best_phi = t, reached, phi
+            if best >= 0:
+                n = planes.normal[best]
+                floor, case = floor_of(np.array([best_phi]), np.array([v[i] @ n]), h,
+                                       planes.epsilon[best])
+                kind[i] = CONTACT
+                constraints.terrain[i] = best
+                constraints.normal[i] = n
+                constraints.floor[i], constraints.floor_case[i] = floor[0], case[0]
+                c_new[i] = 0.0
+                grown.append(i)
+            continue
+        n = constraints.normal[i]
+        impulse = reaction[i] @ n
+        if impulse < 0.0:
+            kind[i] = FREE
+            c_new[i] = 0.0
+            released.append(i)
+            continue
+        t_u = u[i] - (u[i] @ n) * n
+        slip = np.sqrt(t_u @ t_u)
+        coulomb = physical.friction[constraints.terrain[i]] * impulse
+        block = blocks[i]
+        stiffness = 0.5 * (np.trace(block) - n @ block @ n)   # without friction (module doc)
+        sliding = ((stiffness + c[i]) * slip - coulomb) / stiffness
+        if sliding > SLIP_SPEED:
+            c_new[i], case = coulomb / sliding, SLIDING
+        else:
+            c_new[i], case = coulomb / SLIP_SPEED, HOLDING
+        index.append(i)
+        cases.append(case)
+        slips.append(slip)
+        impulses.append(impulse)
+        stiffs.append(stiffness)
+        slides.append(sliding)
+    update = Update(np.array(index, np.int64), np.array(cases, np.int64), c.copy(),
+                    np.array(slips), np.array(impulses), np.array(stiffs), np.array(slides),
+                    np.array(released, np.int64), np.array(grown, np.int64))
+    return update, c_new, len(grown) > 0
+
+
+# --- the adjoint --------------------------------------------------------------------------------
+
+def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
+    """The cotangents of (x, v, the carried dampers) at the step's start, given those of
+    (x', v', the dampers the step leaves); the parameters' share is added to ``bar``."""
+    constraints = record.constraints
+    normal = constraints.normal
+    x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
+    out_x, out_v = np.zeros_like(x), np.zeros_like(x)
+    floor_bar = np.zeros(len(x))
+    # restore_impact_speeds: v_k + (v . n - v_k . n) n
+    vk_bar = v_end_bar.copy()
+    rows = record.restored
+    if len(rows):
+        gn = rowdot(vk_bar[rows], normal[rows])
+        vk_bar[rows] -= gn[:, None] * normal[rows]
+        out_v[rows] += gn[:, None] * normal[rows]
+    # x' = x + h v_k, v_k = v + dv
+    out_x += x_end_bar
+    vk_bar += h * x_end_bar
+    out_v += vk_bar
+    dv_bar = vk_bar
+    c_bar = c_bar.copy()
+    for it in reversed(record.iterations):
+        dv_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar,
+                                          floor_bar, out_x, out_v, bar)
+    c_memory_bar = np.where(record.continues, c_bar, 0.0)
+    # every particle that was a contact at some solve (made or released within the step too)
+    floor_vjp(physical, constraints, np.nonzero(floor_bar)[0], floor_bar, h, out_x, out_v)
+    return out_x, out_v, c_memory_bar
+
+
+def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_bar, out_x,
+                      out_v, bar):
+    """One Newton iteration backwards (module doc); returns the cotangents of its starting dv
+    and dampers."""
+    first, dv = it.first, it.dv
+    x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
+    u0 = v + dv
+    matrix = system_matrix(physical, x_k, h)
+    xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
+    b_bar, u0_bar = np.zeros_like(x), np.zeros_like(x)
+    weights = np.zeros((len(x), 3, 3))   # cotangent of each diagonal block (stiffness, cap)
+    ddv_bar = dv_bar.copy()              # dv_next = dv + the last solve's ddv
+    steps = it.steps
+    for j in reversed(range(len(steps))):
+        step = steps[j]
+        if isinstance(step, Solve):
+            solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_bar,
+                          u0_bar, c_bar, floor_bar, xk_bar, bar)
+            ddv_bar = np.zeros_like(x)
+        else:
+            ddv_before = steps[j - 1].ddv
+            update_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_before,
+                           c_bar, ddv_bar, b_bar, u0_bar, weights, xk_bar, bar)
+    if first and len(it.cap[0]):
+        cap_adjoint(physical, h, x_k, constraints, it.cap, c_bar, b_bar, u0_bar, floor_bar,
+                    weights, u0, bar)
+    diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar)
+    dv_start_bar = dv_bar + u0_bar - physical.solve_mass[:, None] * b_bar
+    rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, b_bar, out_x, out_v, xk_bar, vk_bar, bar)
+    out_v += u0_bar
+    if first:
+        out_x += xk_bar
+        out_v += vk_bar
+    else:
+        out_x += xk_bar
+        out_v += h * xk_bar + vk_bar
+        dv_start_bar += h * xk_bar + vk_bar
+    return dv_start_bar, c_bar
+
+
+def solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_bar, u0_bar, c_bar,
+                  floor_bar, xk_bar, bar):
+    """ddv = solve(A_sp + C(c), b_sp - c T u0, z(floor, u0)): lambda = (Q^T A Q)^-1 Q^T ddv_bar
+    (A symmetric), then b's cotangent is lambda, A's -lambda ddv^T, z's (I - S)(ddv_bar -
+    A lambda)."""
+    kind, c, ddv = step.kind, step.c, step.ddv
+    contact = np.nonzero(kind == CONTACT)[0]
+    normal = constraints.normal
+    friction, _ = friction_terms(kind, normal, c, u0)
+    a = matrix + friction
+    q = basis(kind, normal)
+    lam = solve_reduced(a, ddv_bar, np.zeros_like(ddv_bar), q)
+    b_bar += lam
+    system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
+    n = normal[contact]
+    lam_t = tangential(lam[contact], n)
+    c_bar[contact] -= rowdot(lam_t, ddv[contact]) + rowdot(lam_t, u0[contact])
+    u0_bar[contact] -= c[contact, None] * lam_t
+    rest = ddv_bar - (matrix @ lam.ravel()).reshape(lam.shape)
+    gap_bar = rowdot(rest[contact], n)
+    floor_bar[contact] += gap_bar
+    u0_bar[contact] -= gap_bar[:, None] * n
+
+
+def update_adjoint(physical, h, x_k, matrix, constraints, update, u0, ddv, c_bar, ddv_bar, b_bar,
+                   u0_bar, weights, xk_bar, bar):
+    """The dampers chosen from the solve before (constraints.coulomb_damping), backwards."""
+    c_bar[update.released] = 0.0
+    c_bar[update.grown] = 0.0
+    index = update.index
+    if not len(index):
+        return
+    g = c_bar[index]
+    c_before = update.c_before[index]
+    slip, impulse, stiff, sliding = update.slip, update.impulse, update.stiffness, update.sliding
+    mu = physical.friction[constraints.terrain[index]]
+    coulomb = mu * impulse
+    holding = update.case == HOLDING
+    safe = np.where(holding, 1.0, sliding)
+    coulomb_bar = np.where(holding, g / SLIP_SPEED, g / safe)
+    sliding_bar = np.where(holding, 0.0, -g * coulomb / safe ** 2)
+    stiff_bar = sliding_bar * (coulomb - c_before * slip) / stiff ** 2
+    coulomb_bar -= sliding_bar / stiff
+    c_bar[index] = sliding_bar * slip / stiff
+    slip_bar = sliding_bar * (stiff + c_before) / stiff
+    np.add.at(bar.friction, constraints.terrain[index], coulomb_bar * impulse)
+    impulse_bar = coulomb_bar * mu
+    n = constraints.normal[index]
+    u_t = tangential(u0[index] + ddv[index], n)
+    direction = u_t / np.where(slip > 0.0, slip, 1.0)[:, None]
+    u0_bar[index] += slip_bar[:, None] * direction
+    ddv_bar[index] += slip_bar[:, None] * direction
+    # impulse = n . (A_sp ddv - b_sp)_i
+    g_r = np.zeros_like(u0)
+    g_r[index] = impulse_bar[:, None] * n
+    ddv_bar += (matrix @ g_r.ravel()).reshape(g_r.shape)
+    system_product_vjp(physical, x_k, ddv, g_r, h, xk_bar, bar)
+    b_bar -= g_r
+    # stiffness = (tr B - n^T B n) / 2
+    weights[index] += 0.5 * stiff_bar[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
+
+
+def cap_adjoint(physical, h, x_k, constraints, cap, c_bar, b_bar, u0_bar, floor_bar, weights,
+                u0, bar):
+    """c = friction max(impulse, 0) / slip for the carried dampers the cone capped, with
+    impulse = -b_sp . n + gap n^T B n and gap = floor - n . u0."""
+    index, _, slip, impulse, gap = cap
+    g = c_bar[index]
+    c_bar[index] = 0.0   # the carried value is replaced
+    mu = physical.friction[constraints.terrain[index]]
+    safe = np.where(slip > 0.0, slip, 1.0)
+    pushing = (impulse > 0.0) & (slip > 0.0)
+    coulomb = mu * np.maximum(impulse, 0.0)
+    coulomb_bar = np.where(pushing, g / safe, 0.0)
+    slip_bar = np.where(slip > 0.0, -g * coulomb / safe ** 2, 0.0)
+    np.add.at(bar.friction, constraints.terrain[index], coulomb_bar * np.maximum(impulse, 0.0))
+    impulse_bar = coulomb_bar * mu
+    n = constraints.normal[index]
+    u0_bar[index] += (slip_bar / safe)[:, None] * tangential(u0[index], n)
+    b_bar[index] -= impulse_bar[:, None] * n
+    blocks = diagonal_blocks(physical, x_k, h)[index]
+    gap_bar = impulse_bar * np.einsum("ki,kij,kj->k", n, blocks, n)
+    floor_bar[index] += gap_bar
+    u0_bar[index] -= gap_bar[:, None] * n
+    weights[index] += (impulse_bar * gap)[:, None, None] * n[:, :, None] * n[:, None, :]
+
+
+def diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar):
+    """Add sum_i weights_i : B_i (diagonal_blocks) differentiated into xk_bar and bar."""
+    if not weights.any():
+        return
+    trace = np.einsum("kii->k", weights)
+    bar.mass += np.where(physical.free, trace, 0.0)
+    bar.drag += h * trace
+    springs = geometry(physical, x_k)
+    along_, across, across_dl, across_dr, ratio = stiffness_coefficients(physical, springs)
+    real = springs.length > 0.0
+    p = (h * physical.kd + h * h * along_) * real
+    l = springs.unit
+    w = weights[physical.a] + weights[physical.b]
+    g_p = np.einsum("ki,kij,kj->k", l, w, l) * real
+    g_q = np.einsum("kii->k", w) * real
+    bar.kd += h * g_p
+    along_bar = h * h * g_p
+    across_bar = h * h * g_q - along_bar
+    bar.ks += along_bar + across_bar * ratio
+    bar.rest += across_bar * across_dr
+    l_bar = p[:, None] * np.einsum("kij,kj->ki", w + np.transpose(w, (0, 2, 1)), l)
+    d_bar = (l_bar - rowdot(l_bar, l)[:, None] * l) * springs.inverse[:, None]
+    d_bar += (across_bar * across_dl)[:, None] * l
+    np.add.at(xk_bar, physical.a, d_bar)
+    np.add.at(xk_bar, physical.b, -d_bar)
