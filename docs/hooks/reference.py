@@ -94,6 +94,10 @@ NOTES = {
     "bodies/*/rotation_degrees": ("degrees", "initial rotation about `rotation_axis`"),
     "bodies/*/rotation_axis": ("", "axis of that rotation (any length but zero)"),
     "bodies/*/pinned": ("", "particle numbers held fixed in space"),
+    "bodies/*/pins": ("", "the `[[bodies.pins]]` tables: particles chosen by `particles`, "
+                          "`region` or `group`, held, moved by a `motion`, made to `follow` a "
+                          "terrain, or soft with `stiffness` and `damping` "
+                          "([Scene files](../scene-files.md#pins-that-move))"),
     "bodies/cloth/pinned": ("", "`corners`, `none`, `edge` (the +z edge), `edge+z`, `edge-z`, "
                                 "`edge+x`, `edge-x`, or a list of particle numbers"),
     "bodies/cloth/width": ("m", "size along the sheet's local x axis"),
@@ -122,6 +126,10 @@ NOTES = {
     "terrains/*/restitution": ("", "share of the normal speed kept after an impact"),
     "terrains/*/friction": ("", "Coulomb friction coefficient"),
     "terrains/*/epsilon": ("m", "contact band: a particle closer than this touches"),
+    "terrains/*/motion": ("", "moves the terrain as a function of time: `keyframes` (`time`, "
+                              "`position`, `rotation_degrees`, `rotation_axis`) with "
+                              "`interpolation`, or `velocity` and `angular_velocity`, about "
+                              "`pivot` ([Scene files](../scene-files.md#moving-terrains))"),
     "terrains/*/point": ("m", "a point of the plane"),
     "terrains/*/normal": ("", "normal towards the free side (any length but zero)"),
     "terrains/sphere/center": ("m", "centre; bodies collide with its outside"),

@@ -14,6 +14,7 @@ from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
 from .terrains import pack_terrains
+from .world import pack_world
 
 
 class ModelArrays(NamedTuple):
@@ -37,6 +38,24 @@ class ModelArrays(NamedTuple):
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
+    # The world that moves (motion.py, world.py): each terrain's row of the motion table (-1:
+    # still), the motions (the moving terrains', then the moving pins') and their keys, their
+    # poses at the time last asked for (world.move_world), and the pins that move: particle,
+    # motion row, and where the particle started (in the motion's frame at its placing)
+    terrain_motion: np.ndarray   # (T,) int64
+    motion_info: np.ndarray      # (M, motion.INFO)
+    motion_keys: np.ndarray      # (K, motion.KEY)
+    motion_pose: np.ndarray      # (M, motion.POSE), written by the kernels
+    pin_particles: np.ndarray    # (Q,) int64
+    pin_motion: np.ndarray       # (Q,) int64
+    pin_placed: np.ndarray       # (Q, 3) m
+    pin_stiffness: np.ndarray    # (Q,) N/m, 0 for a hard pin
+    pin_damping: np.ndarray      # (Q,) N s/m
+    # [the time the call starts at, the time of the step being taken] (s): written by the
+    # integrators (Integrator.advance, integrators/_steps.drive) and read by the stages, which
+    # move the world to their own time (world.py); work space, like motion_pose, which the
+    # model lends the kernels so that no kernel signature carries the time
+    clock: np.ndarray            # (2,)
     # Ball contacts (collision/pipeline.py). A ball is a particle with radius > 0 (only Balls
     # bodies give radii); every other particle is a point.
     balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
@@ -157,7 +176,8 @@ def build_model(scene) -> Model:
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
-        **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius),
+        **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
+        clock=np.zeros(2), **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))

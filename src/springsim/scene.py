@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .collision.shapes.settings import SurfaceContact
+from .bodies.pins import check_follows
 from .errors import is_finite, require
 from .sampling import check_duration
 from .scene_values import check_values
@@ -52,6 +53,8 @@ class Scene:
             body.validate(f"bodies.{i}")
         for t, terrain in enumerate(self.terrains):
             terrain.validate(f"terrains.{t}")
+        for i, body in enumerate(self.bodies):
+            check_follows(getattr(body, "pins", ()), len(self.terrains), f"bodies.{i}.pins")
         self.validate_implicit_settings()
         check_scene_size(self)   # before anything is allocated
         for i, body in enumerate(self.bodies):

@@ -179,6 +179,11 @@ def set_path(node, parts: list[str], value, prefix: str, full_key: str):
     require(head in fields, full_key, value,
             f"unknown key; {describe(node, prefix)} takes " + ", ".join(fields))
     current = getattr(node, head)
+    if rest and current is None:
+        # an unset optional table (a terrain's motion): its keys edit a default one
+        annotation = strip_optional(typing.get_type_hints(type(node)).get(head, typing.Any))
+        if dataclasses.is_dataclass(annotation):
+            current = _default_instance(annotation) or current
     if rest:
         new = _descend(current, rest, value, key, full_key)
     else:
