@@ -122,3 +122,28 @@ keyframes = [
     with pytest.raises(SceneError, match="terrains.0.motion.velocity"):
         scene.terrains[0].motion.velocity = (1.0, 0.0, 0.0)
         scene.validate()
+
+
+def test_motion_pins_and_wind_are_written_out_and_read_back():
+    """scene_to_toml writes what load_scene reads back: the motion, moving pins and wind."""
+    import tomllib
+
+    from springsim.scenefile import apply_override, scene_to_toml
+
+    table = {"bodies": [{"type": "cloth", "particles_per_edge": 3, "pins": [
+        {"particles": [0], "motion": {"velocity": [0.0, 1.0, 0.0]}},
+        {"particles": [2], "follow": "terrains.0", "stiffness": 50.0}]}],
+        "terrains": [{"type": "sphere", "motion": {
+            "interpolation": "smooth",
+            "keyframes": [{"time": 0.0}, {"time": 1.0, "position": [1.0, 0.0, 0.0]}]}}],
+        "wind": {"velocity": [3.0, 0.0, 0.0], "gusts": {"strength": 0.2, "seed": 4}}}
+    scene = scene_from_table(table)
+    scene.validate()
+    again = scene_from_table(tomllib.loads(scene_to_toml(scene)))
+    assert again == scene
+    moved = apply_override(again, "terrains.0.motion.keyframes.1.time=2.0")
+    assert moved.terrains[0].motion.keyframes[1].time == 2.0
+    plane = apply_override(scene_from_table({"bodies": [{"type": "balls"}],
+                                             "terrains": [{"type": "plane"}]}),
+                           "terrains.0.motion.velocity=[0.0, 0.0, 2.0]")
+    assert plane.terrains[0].motion.velocity == (0.0, 0.0, 2.0)

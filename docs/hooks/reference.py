@@ -56,6 +56,8 @@ NOTES = {
     "scene/*/duration": ("s", "how long `springsim run` simulates"),
     "scene/*/gravity": ("m/s²", "acceleration of gravity"),
     "scene/*/drag": ("N s/m", "viscous drag on every particle, force `-drag v`"),
+    "scene/*/wind": ("", "moving air: `velocity` or `keyframes`, `density`, `drag`, "
+                         "`friction`, `gusts` ([Scene files](../scene-files.md#wind))"),
     "scene/*/implicit": ("", "settings of `implicit_euler`, checked whatever the integrator"),
     "scene/*/implicit.newton_iterations": ("", "linearized solves per step (1 is Baraff and "
                                                "Witkin's step)"),

@@ -84,7 +84,9 @@ def pack_world(terrains, built, offsets) -> dict:
 
 @kernel
 def move_world(model, t):
-    """Write every motion's pose at time t (s) into model.motion_pose."""
+    """Write every motion's pose at time t (s) into model.motion_pose; the wind reads t from
+    model.clock[2]."""
+    model.clock[2] = t
     for m in range(model.motion_info.shape[0]):
         pose_into(model.motion_info, model.motion_keys, m, t, model.motion_pose[m])
 

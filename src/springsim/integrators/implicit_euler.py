@@ -53,6 +53,7 @@ from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_ter
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..state import ContactMemory
+from ..wind import add_wind_forces, add_wind_jacobian
 from ..world import add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_time
 from .base import Integrator, register
 from ._steps import add_scaled, copy_positions, drive
@@ -197,6 +198,7 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
                work.rhs)
     add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)
+    add_wind_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.blocks)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
     work.ddv[:] = 0.0
     for i in range(x.shape[0]):
@@ -222,6 +224,7 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
             external = (m * model.gravity[c] if w > 0.0 else 0.0) - model.drag[i] * v_k[i, c]
             rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
     add_pin_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft pins, at the step's end
+    add_wind_forces(model, x_k, v_k, np.full(1, h), rhs)  # the air, at the step's end
     if first:
         add_stiffness_product(model, x, v, h * h, rhs)
 
