@@ -56,6 +56,8 @@ NOTES = {
     "scene/*/duration": ("s", "how long `springsim run` simulates"),
     "scene/*/gravity": ("m/s²", "acceleration of gravity"),
     "scene/*/drag": ("N s/m", "viscous drag on every particle, force `-drag v`"),
+    "scene/*/wind": ("", "moving air: `velocity` or `keyframes`, `density`, `drag`, "
+                         "`friction`, `gusts` ([Scene files](../scene-files.md#wind))"),
     "scene/*/implicit": ("", "settings of `implicit_euler`, checked whatever the integrator"),
     "scene/*/implicit.newton_iterations": ("", "linearized solves per step (1 is Baraff and "
                                                "Witkin's step)"),
@@ -95,6 +97,10 @@ NOTES = {
     "bodies/*/rotation_degrees": ("degrees", "initial rotation about `rotation_axis`"),
     "bodies/*/rotation_axis": ("", "axis of that rotation (any length but zero)"),
     "bodies/*/pinned": ("", "particle numbers held fixed in space"),
+    "bodies/*/pins": ("", "the `[[bodies.pins]]` tables: particles chosen by `particles`, "
+                          "`region` or `group`, held, moved by a `motion`, made to `follow` a "
+                          "terrain, or soft with `stiffness` and `damping` "
+                          "([Scene files](../scene-files.md#pins-that-move))"),
     "bodies/cloth/pinned": ("", "`corners`, `none`, `edge` (the +z edge), `edge+z`, `edge-z`, "
                                 "`edge+x`, `edge-x`, or a list of particle numbers"),
     "bodies/cloth/file": ("", "a triangle or quad mesh (OBJ, STL, PLY, OFF, GLB, GLTF) to be "
@@ -143,6 +149,10 @@ NOTES = {
     "terrains/*/restitution": ("", "share of the normal speed kept after an impact"),
     "terrains/*/friction": ("", "Coulomb friction coefficient"),
     "terrains/*/epsilon": ("m", "contact band: a particle closer than this touches"),
+    "terrains/*/motion": ("", "moves the terrain as a function of time: `keyframes` (`time`, "
+                              "`position`, `rotation_degrees`, `rotation_axis`) with "
+                              "`interpolation`, or `velocity` and `angular_velocity`, about "
+                              "`pivot` ([Scene files](../scene-files.md#moving-terrains))"),
     "terrains/*/point": ("m", "a point of the plane"),
     "terrains/*/normal": ("", "normal towards the free side (any length but zero)"),
     "terrains/sphere/center": ("m", "centre; bodies collide with its outside"),

@@ -13,6 +13,8 @@ from ._jit import inline_kernel, kernel
 from .collision.response.terrain import apply_contact_forces
 from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
 from .springs import spring_force_factor
+from .wind import add_wind_forces
+from .world import add_pin_forces
 
 
 @kernel
@@ -73,6 +75,8 @@ def free_accelerations(model, x, v, out, columns):
         w = inv_mass[i]
         for c in range(3):
             out[i, c] = w * (out[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
+    add_pin_forces(model, x, v, inv_mass, out)   # soft pins' springs (world.py)
+    add_wind_forces(model, x, v, inv_mass, out)  # the air (wind.py)
 
 
 @kernel

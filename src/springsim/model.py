@@ -14,6 +14,8 @@ from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
 from .terrains import pack_terrains
+from .wind import pack_wind
+from .world import pack_world
 
 
 class ModelArrays(NamedTuple):
@@ -37,6 +39,29 @@ class ModelArrays(NamedTuple):
     terrain_restitution: np.ndarray
     terrain_friction: np.ndarray
     terrain_epsilon: np.ndarray
+    # The world that moves (motion.py, world.py): each terrain's row of the motion table (-1:
+    # still), the motions (the moving terrains', then the moving pins') and their keys, their
+    # poses at the time last asked for (world.move_world), and the pins that move: particle,
+    # motion row, and where the particle started (in the motion's frame at its placing)
+    terrain_motion: np.ndarray   # (T,) int64
+    motion_info: np.ndarray      # (M, motion.INFO)
+    motion_keys: np.ndarray      # (K, motion.KEY)
+    motion_pose: np.ndarray      # (M, motion.POSE), written by the kernels
+    pin_particles: np.ndarray    # (Q,) int64
+    pin_motion: np.ndarray       # (Q,) int64
+    pin_placed: np.ndarray       # (Q, 3) m
+    pin_stiffness: np.ndarray    # (Q,) N/m, 0 for a hard pin
+    pin_damping: np.ndarray      # (Q,) N s/m
+    # [the time the call starts at, the time of the step being taken] (s): written by the
+    # integrators (Integrator.advance, integrators/_steps.drive) and read by the stages, which
+    # move the world to their own time (world.py); work space, like motion_pose, which the
+    # model lends the kernels so that no kernel signature carries the time
+    clock: np.ndarray            # (3,): and the time the world was last moved to
+    # Wind (wind.py): settings, velocity keys, gust modes, and the triangles it blows on
+    wind_settings: np.ndarray    # (6,)
+    wind_keys: np.ndarray        # (K, 4) time, velocity
+    wind_modes: np.ndarray       # (G, 8)
+    wind_triangles: np.ndarray   # (W, 3) int64 particle numbers
     # Ball contacts (collision/pipeline.py). A ball is a particle with radius > 0 (only Balls
     # bodies give radii); every other particle is a point.
     balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
@@ -158,7 +183,9 @@ def build_model(scene) -> Model:
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
-        **pack_terrains(scene.terrains), **collision_arrays(scene.bodies, built, radius),
+        **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
+        clock=np.zeros(3), **pack_wind(scene.wind), wind_triangles=wind_triangles(scene, built, offsets),
+        **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
@@ -198,6 +225,18 @@ def sheet_arrays(built, offsets) -> dict:
     return {"sheet_triangles": triangles,
             "triangle_start": np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
             "particle_triangles": (order // 3).astype(np.int64)}
+
+
+def wind_triangles(scene, built, offsets) -> np.ndarray:
+    """The triangles of particles the wind blows on (none without wind): each body's surface,
+    or its contact surface where the drawn one is embedded (a mesh body's lattice boundary)."""
+    triangles = [np.empty((0, 3), np.int64)]
+    if scene.wind is not None:
+        for b, start in zip(built, offsets):
+            own = sheet_surface(b) if b.embedding is None else b.collision_surface
+            if own is not None and len(own):
+                triangles.append(np.asarray(own, np.int64) + start)
+    return np.concatenate(triangles)
 
 
 def sheet_surface(built) -> np.ndarray:

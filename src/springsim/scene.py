@@ -8,10 +8,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .collision.shapes.settings import SurfaceContact
+from .bodies.pins import check_follows
 from .errors import is_finite, require
 from .sampling import check_duration
 from .scene_values import check_values
 from .sizes import check_scene_size
+from .wind import Wind
 
 
 @dataclass
@@ -35,6 +37,7 @@ class Scene:
     gravity: tuple = (0.0, -9.8, 0.0)     # m/s^2
     drag: float = 0.0                     # viscous drag coefficient, N s/m (f = -drag v)
     implicit: ImplicitSettings = field(default_factory=ImplicitSettings)
+    wind: Wind | None = None              # moving air (wind.py); unset: still air, no force
 
     def validate(self) -> None:
         from .integrators import integrator_names
@@ -52,7 +55,11 @@ class Scene:
             body.validate(f"bodies.{i}")
         for t, terrain in enumerate(self.terrains):
             terrain.validate(f"terrains.{t}")
+        for i, body in enumerate(self.bodies):
+            check_follows(getattr(body, "pins", ()), len(self.terrains), f"bodies.{i}.pins")
         self.validate_implicit_settings()
+        if self.wind is not None:
+            self.wind.validate("wind")
         check_scene_size(self)   # before anything is allocated
         for i, body in enumerate(self.bodies):
             if isinstance(body, SurfaceContact):

@@ -259,6 +259,7 @@ def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
     defaults = Scene() if only_changes else None
     lines = [f"{name} = {toml_value(getattr(scene, name))}"
              for name in init_fields(Scene) if name not in TYPED_LISTS
+             and getattr(scene, name) is not None   # unset (no wind): TOML has no null
              and (name == "name" or not _is_default(scene, defaults, name))]
     for list_name, (_, registry) in TYPED_LISTS.items():
         for item in getattr(scene, list_name):

@@ -34,6 +34,9 @@ class BuiltBody:
     # a sheet is all surface (a cloth): balls touch it through its triangles in implicit_euler's
     # solve (model.sheet_arrays)
     sheet: bool = False
+    # pins that move (bodies/pins.py): (particle numbers local to the body, Pin) each; their
+    # particles are in ``pinned`` too
+    moving_pins: list = field(default_factory=list)
 
 
 __all__ = ["BuiltBody", "SpringParameters"]

@@ -35,7 +35,7 @@ from ..springs import SpringKind, SpringParameters, lattice_springs
 from ..surfaces import Embedding
 from . import BuiltBody
 from .cloth_material import ClothMaterial, lumped_masses, material_constants
-from .pins import Pin, pinned_mask
+from .pins import Pin, moving_pins, pinned_mask
 from .sheet_mesh import SheetMesh, sheet_mesh
 from ..collision.shapes.settings import SurfaceContact
 
@@ -169,8 +169,10 @@ class Cloth(SurfaceContact):
             constants = material_constants(self.material, self.rest_positions(), faces,
                                            springs, kinds)
         pinned = self.pinned_mask()
+        moving = []
         if self.pins:
             pinned |= pinned_mask(self.pins, positions, self._groups(), "pins")
+            moving = moving_pins(self.pins, positions, self._groups())
         in_no_face = np.bincount(faces[faces >= 0], minlength=count) == 0
         pinned |= in_no_face             # it has no spring to move with
         masses[in_no_face] = float(self.particle_mass)
@@ -186,7 +188,8 @@ class Cloth(SurfaceContact):
             spring_parameters={SpringKind.STRUCTURAL: self.structural,
                                SpringKind.SHEAR: self.shear, SpringKind.BEND: self.bend},
             surface=surface, radii=np.zeros(count), embedding=embedding,
-            collision_surface=collision_surface, spring_constants=constants, sheet=True)
+            collision_surface=collision_surface, spring_constants=constants, sheet=True,
+            moving_pins=moving)
 
     def _springs(self, faces, count):
         """(S, 2) springs and (S,) kinds, kind by kind; kinds with ks = kd = 0 build none

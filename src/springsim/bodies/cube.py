@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
+from .pins import Pin, moving_pins, pinned_mask
 from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
@@ -52,6 +53,7 @@ class Cube(LatticeSprings, SurfaceContact):
     rotation_degrees: float = 0.0
     rotation_axis: tuple = (1.0, 0.0, 1.0)
     pinned: tuple = ()
+    pins: list[Pin] = field(default_factory=list)   # held, moving or soft pins (bodies/pins.py)
 
     def validate(self, key: str) -> None:
         n = self.particles_per_edge
@@ -82,6 +84,10 @@ class Cube(LatticeSprings, SurfaceContact):
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
+        for p, pin in enumerate(self.pins):
+            pin.validate(f"{key}.pins.{p}")
+        if self.pins:
+            pinned_mask(self.pins, self.build_positions(), {}, f"{key}.pins")
 
     def surface_spacing(self) -> float:
         return self.edge_length / (self.particles_per_edge - 1)
@@ -95,9 +101,9 @@ class Cube(LatticeSprings, SurfaceContact):
                    + 3 * n * n * self.face_springs)                         # face
         return n ** 3, springs
 
-    def build(self) -> BuiltBody:
+    def build_positions(self) -> np.ndarray:
+        """The particles where they start (m)."""
         n = self.particles_per_edge
-        index = np.arange(n ** 3, dtype=np.int32).reshape(n, n, n)
         spacing = self.edge_length / (n - 1)
         lattice = np.indices((n, n, n)).reshape(3, -1).T - n // 2
         offsets = lattice * spacing
@@ -105,12 +111,19 @@ class Cube(LatticeSprings, SurfaceContact):
             axis = np.asarray(self.rotation_axis, float)
             rotvec = np.radians(self.rotation_degrees) * axis / np.linalg.norm(axis)
             offsets = Rotation.from_rotvec(rotvec).apply(offsets)
-        positions = offsets + np.asarray(self.position, float)
+        return offsets + np.asarray(self.position, float)
+
+    def build(self) -> BuiltBody:
+        n = self.particles_per_edge
+        index = np.arange(n ** 3, dtype=np.int32).reshape(n, n, n)
+        positions = self.build_positions()
 
         springs, kinds = lattice_pattern(index, self)
 
         pinned = np.zeros(n ** 3, bool)
         pinned[list(self.pinned)] = True
+        if self.pins:
+            pinned |= pinned_mask(self.pins, positions, {}, "pins")
         return BuiltBody(
             positions=positions,
             velocities=np.tile(np.asarray(self.velocity, float), (n ** 3, 1)),
@@ -120,6 +133,7 @@ class Cube(LatticeSprings, SurfaceContact):
             spring_kind=kinds,
             spring_parameters=spring_parameters(self),
             surface=cube_surface(index),
+            moving_pins=moving_pins(self.pins, positions, {}),
         )
 
 

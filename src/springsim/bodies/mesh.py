@@ -40,7 +40,7 @@ import functools
 import math
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
@@ -51,6 +51,7 @@ from ..errors import SceneError, is_finite, require
 from ..meshfiles import TriangleMesh, placed, read_mesh_file, validate_placement, weld
 from ..surfaces import Embedding
 from . import BuiltBody
+from .pins import Pin, moving_pins, pinned_mask
 from .cube import LatticeSprings, lattice_pattern, spring_parameters
 from .lattice_fill import box_points, fill, full_cells, locate
 from .mesh_solid import has_inside, unusual
@@ -93,6 +94,7 @@ class MeshBody(LatticeSprings, SurfaceContact):
     velocity: tuple = (0.0, 0.0, 0.0)
     particle_mass: float = 1.0
     pinned: tuple = ()
+    pins: list[Pin] = field(default_factory=list)   # held, moving or soft pins (bodies/pins.py)
 
     def validate(self, key: str) -> None:
         validate_placement(self, key)
@@ -118,6 +120,13 @@ class MeshBody(LatticeSprings, SurfaceContact):
         for index in self.pinned:
             require(0 <= index < count, f"{key}.pinned", index,
                     f"particle numbers must lie in [0, {count - 1}]")
+        for p, pin in enumerate(self.pins):
+            pin.validate(f"{key}.pins.{p}")
+            require(not pin.group, f"{key}.pins.{p}.group", pin.group,
+                    "a mesh body's particles are its lattice's, not the file's vertices: "
+                    "choose them by particles = [...] or a region")
+        if self.pins:
+            pinned_mask(self.pins, self.lattice(key).positions, {}, f"{key}.pins")
 
     def surface_spacing(self) -> float:
         return self.lattice().spacing
@@ -162,6 +171,8 @@ class MeshBody(LatticeSprings, SurfaceContact):
         count = len(lattice.positions)
         pinned = np.zeros(count, bool)
         pinned[list(self.pinned)] = True
+        if self.pins:
+            pinned |= pinned_mask(self.pins, lattice.positions, {}, "pins")
         return BuiltBody(
             positions=lattice.positions.copy(),
             velocities=np.tile(np.asarray(self.velocity, float), (count, 1)),
@@ -170,7 +181,8 @@ class MeshBody(LatticeSprings, SurfaceContact):
             spring_parameters=spring_parameters(self),
             surface=self.mesh().triangles.astype(np.int32), embedding=lattice.embedding,
             terrain_offsets=np.zeros(count),
-            collision_surface=lattice_boundary(lattice.index))
+            collision_surface=lattice_boundary(lattice.index),
+            moving_pins=moving_pins(self.pins, lattice.positions, {}))
 
     def summary(self) -> str:
         """The lattice in words, for the run's summary."""

@@ -1,4 +1,5 @@
-"""Pins: which particles of a body hold still, chosen by number, by a box, or by a named group.
+"""Pins: which particles of a body are held, chosen by number, by a box, or by a named group,
+and where they are held: still, moved by a ``motion`` table, or following a moving terrain.
 
 A body's ``pins`` is a list of ``[[bodies.pins]]`` tables, each choosing particles in one way:
 
@@ -11,12 +12,30 @@ A body's ``pins`` is a list of ``[[bodies.pins]]`` tables, each choosing particl
   ticked).
 
 A pin that chooses no particle is an error: it is a mistake in the scene, not a choice.
+
+Where the chosen particles go:
+
+- neither ``motion`` nor ``follow``: they hold still where they start;
+- ``motion``: a table like a terrain's (motion.py): each particle keeps its place in the moving
+  frame, x(t) = pivot + position(t) + R(t) (x_start - pivot), the pivot defaulting to the mean of
+  the chosen particles' starting positions;
+- ``follow = "terrains.N"``: the particles keep their place in terrain N's moving frame (its own
+  motion, about its own pivot); a terrain that does not move holds them still.
+
+A pin is hard by default: the particle is exactly on its path at the end of every step, under
+every integrator (world.py), and moves with the path's velocity. With ``stiffness`` (N/m) it is
+soft: a spring from the particle to its path's point, with ``damping`` (N s/m) against the
+velocity relative to the path.
 """
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import SceneError, is_finite, require
+from ..motion import Motion
+
+FOLLOW = re.compile(r"terrains\.(0|[1-9][0-9]*)")
 
 
 @dataclass
@@ -34,8 +53,24 @@ class Pin:
     particles: list = field(default_factory=list)   # particle numbers
     region: Region | None = None                    # a box at the start (m)
     group: str = ""                                 # a named group of the mesh file
+    motion: Motion | None = None                    # moves the chosen particles (motion.py)
+    follow: str = ""                                # "terrains.N": moves them with terrain N
+    stiffness: float | None = None                  # N/m: a soft pin (a spring); unset: hard
+    damping: float = 0.0                            # N s/m, a soft pin's damper
 
     def validate(self, key: str) -> None:
+        if self.stiffness is not None:
+            require(is_finite(self.stiffness) and self.stiffness > 0, f"{key}.stiffness",
+                    self.stiffness, "must be > 0 N/m (leave it out for a hard pin)")
+        require(is_finite(self.damping) and self.damping >= 0, f"{key}.damping", self.damping,
+                "must be >= 0 N s/m")
+        if self.motion is not None:
+            self.motion.validate(f"{key}.motion")
+        if self.follow:
+            require(FOLLOW.fullmatch(self.follow) is not None, f"{key}.follow", self.follow,
+                    'must name a terrain as "terrains.N" (N its number, from 0)')
+            require(self.motion is None, f"{key}.follow", self.follow,
+                    "a pin follows a terrain or has its own motion, not both")
         given = [name for name in ("particles", "region", "group") if getattr(self, name)]
         require(len(given) == 1, key, given or "nothing",
                 "a pin chooses its particles in exactly one way: particles = [...], "
@@ -57,7 +92,8 @@ def pinned_mask(pins, positions: np.ndarray, groups: dict, key: str) -> np.ndarr
         chosen = chosen_particles(pin, positions, groups, f"{key}.{p}")
         require(chosen.size > 0, f"{key}.{p}", describe(pin), "chooses no particle; "
                 + _hint(pin, positions))
-        mask[chosen] = True
+        if pin.stiffness is None:   # a soft pin's particles keep their mass: a spring holds them
+            mask[chosen] = True
     return mask
 
 
@@ -79,6 +115,28 @@ def chosen_particles(pin: Pin, positions: np.ndarray, groups: dict, key: str) ->
                              ", ".join(sorted(groups)) if groups else "none (only OBJ files "
                              "carry groups: g or o lines)"))
     return np.asarray(groups[pin.group], np.int64)
+
+
+def followed_terrain(pin: Pin) -> int:
+    """The number of the terrain a pin follows, or -1."""
+    return int(FOLLOW.fullmatch(pin.follow).group(1)) if pin.follow else -1
+
+
+def check_follows(pins, terrain_count: int, key: str) -> None:
+    """Every ``follow`` names a terrain of the scene."""
+    for p, pin in enumerate(pins):
+        if pin.follow:
+            require(followed_terrain(pin) < terrain_count, f"{key}.{p}.follow", pin.follow,
+                    f"names no terrain: the scene has {terrain_count} "
+                    f"(terrains.0 to terrains.{terrain_count - 1})" if terrain_count else
+                    "names no terrain: the scene has none")
+
+
+def moving_pins(pins, positions: np.ndarray, groups: dict) -> list:
+    """(particle numbers, pin) for each pin that moves (a motion or a followed terrain) or is
+    soft (a spring to where it starts)."""
+    return [(chosen_particles(pin, positions, groups, "pins"), pin) for pin in pins
+            if pin.motion is not None or pin.follow or pin.stiffness is not None]
 
 
 def describe(pin: Pin):

@@ -46,7 +46,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from ..terrains import terrain_distance
+from ..world import surface_velocity, terrain_at
 
 FREE, CONTACT, PINNED = 0, 1, 2
 SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
@@ -54,11 +54,13 @@ FRICTION_SETTLED = 0.02  # relative change of the friction impulses that needs n
 
 
 @kernel
-def lowest_normal_velocity(phi, v_n, h, epsilon):
-    """The floor a contact's normal velocity is held at by the end of the step (module doc)."""
+def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
+    """The floor a contact's normal velocity is held at by the end of the step (module doc);
+    s_n is the terrain surface's normal velocity (zero for a still terrain): in the band a
+    particle may slow down to it but not fall behind it."""
     if phi >= epsilon:
         return -phi / h
-    return max(min(v_n, 0.0), -max(phi, 0.0) / h)
+    return max(s_n + min(v_n - s_n, 0.0), -max(phi, 0.0) / h)
 
 
 @kernel
@@ -73,9 +75,8 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                           model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                           model.terrain_offset[i])
+        phi, mx, my, mz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+                                     model.terrain_offset[i])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:
@@ -89,15 +90,20 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
 
 
 @kernel
-def make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain, normal_floor):
+def make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface, terrain,
+                 normal_floor):
     kind[i] = CONTACT
     terrain[i] = t
     normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-    normal_floor[i] = lowest_normal_velocity(phi, v_n, h, model.terrain_epsilon[t])
+    s0, s1, s2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+    surface[i, 0], surface[i, 1], surface[i, 2] = s0, s1, s2
+    normal_floor[i] = lowest_normal_velocity(phi, v_n, s0 * nx + s1 * ny + s2 * nz, h,
+                                             model.terrain_epsilon[t])
 
 
 @kernel
-def find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, friction_damping):
+def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floor,
+                     friction_damping):
     """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without."""
@@ -111,8 +117,8 @@ def find_constraints(model, x, v, h, kind, normal, terrain, normal_floor, fricti
             t, phi, nx, ny, nz, v_n = closest_terrain(model, x, i, v[i, 0], v[i, 1], v[i, 2],
                                                       h, True)
             if t >= 0:
-                make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain,
-                             normal_floor)
+                make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
+                             terrain, normal_floor)
         if kind[i] != CONTACT or terrain[i] != previous:
             friction_damping[i] = 0.0
 
@@ -162,10 +168,12 @@ def filtered(kind, n0, n1, n2, u0, u1, u2):
 
 
 @kernel
-def set_friction_damping(i, value, pattern, blocks, rhs, normal, v, dv, friction_damping):
+def set_friction_damping(i, value, pattern, blocks, rhs, normal, surface, v, dv,
+                         friction_damping):
     """Make particle i's friction damper c = value in the system: its diagonal block holds
-    c (I - n n^T), and the right-hand side -c (I - n n^T)(v + dv), so that the impulse on the
-    solved velocity change ddv is -c (I - n n^T)(v + dv + ddv)."""
+    c (I - n n^T), and the right-hand side -c (I - n n^T)(v + dv - s), so that the impulse on the
+    solved velocity change ddv is -c (I - n n^T)(v + dv + ddv - s): against the sliding
+    relative to the terrain's surface velocity s."""
     change = value - friction_damping[i]
     if change == 0.0:
         return
@@ -173,7 +181,8 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, v, dv, friction
     slot = pattern.diagonal_slot[i]
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
     n = (nx, ny, nz)
-    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
+    u0, u1, u2 = (v[i, 0] + dv[i, 0] - surface[i, 0], v[i, 1] + dv[i, 1] - surface[i, 1],
+                  v[i, 2] + dv[i, 2] - surface[i, 2])
     u_n = u0 * nx + u1 * ny + u2 * nz
     rhs[i, 0] -= change * (u0 - u_n * nx)
     rhs[i, 1] -= change * (u1 - u_n * ny)
@@ -184,8 +193,8 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, v, dv, friction
 
 
 @kernel
-def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, normal, v, dv,
-                                ddv, damping):
+def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, normal, surface,
+                                v, dv, ddv, damping):
     """The friction damper c that contact i carries over from the last step, lowered where it
     would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
     the step starts from. Without this a contact that friction held at rest (c = Coulomb /
@@ -203,7 +212,8 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     if kind[i] != CONTACT or damping == 0.0:
         return damping
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-    u0, u1, u2 = v[i, 0] + dv[i, 0], v[i, 1] + dv[i, 1], v[i, 2] + dv[i, 2]
+    u0, u1, u2 = (v[i, 0] + dv[i, 0] - surface[i, 0], v[i, 1] + dv[i, 1] - surface[i, 1],
+                  v[i, 2] + dv[i, 2] - surface[i, 2])   # relative to the surface
     u_n = u0 * nx + u1 * ny + u2 * nz
     slip = math.sqrt((u0 - u_n * nx) ** 2 + (u1 - u_n * ny) ** 2 + (u2 - u_n * nz) ** 2)
     slot = pattern.diagonal_slot[i]
@@ -240,8 +250,8 @@ def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
 
 
 @kernel
-def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, terrain,
-                    normal_floor, friction_damping, reaction):
+def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, surface,
+                    terrain, normal_floor, friction_damping, reaction):
     """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
     solve. Adjusts ddv, the matrix and the right-hand side to every change. Returns whether
     another solve is needed: some contact came or went, or the friction impulses (summed over
@@ -257,8 +267,8 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
             t, phi, nx, ny, nz, _ = closest_terrain(model, x, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-                make_contact(model, i, t, phi, nx, ny, nz, v_n, h, kind, normal, terrain,
-                             normal_floor)
+                make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
+                             terrain, normal_floor)
                 hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
                 changed += 1
             continue
@@ -266,16 +276,19 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
         impulse_n = reaction[i, 0] * nx + reaction[i, 1] * ny + reaction[i, 2] * nz
         if impulse_n < 0.0:
             kind[i] = FREE   # the terrain would have to pull
-            set_friction_damping(i, 0.0, pattern, blocks, rhs, normal, v, dv, friction_damping)
+            set_friction_damping(i, 0.0, pattern, blocks, rhs, normal, surface, v, dv,
+                                 friction_damping)
             changed += 1
             continue
+        u0, u1, u2 = u0 - surface[i, 0], u1 - surface[i, 1], u2 - surface[i, 2]   # relative
         u_n = u0 * nx + u1 * ny + u2 * nz
         slip = math.sqrt((u0 - u_n * nx) ** 2 + (u1 - u_n * ny) ** 2 + (u2 - u_n * nz) ** 2)
         coulomb = model.terrain_friction[terrain[i]] * impulse_n
         damping = coulomb_damping(pattern, blocks, normal, i, friction_damping[i], slip, coulomb)
         friction_total += coulomb
         friction_moved += abs(damping - friction_damping[i]) * max(slip, SLIP_SPEED)
-        set_friction_damping(i, damping, pattern, blocks, rhs, normal, v, dv, friction_damping)
+        set_friction_damping(i, damping, pattern, blocks, rhs, normal, surface, v, dv,
+                             friction_damping)
     return changed > 0 or friction_moved > FRICTION_SETTLED * friction_total
 
 

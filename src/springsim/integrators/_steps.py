@@ -11,6 +11,9 @@ pairs from. It returns the list for that pass: ``pairs``, or one renewed within 
 
     step -> collide (terrain impacts, body-body contact: collision/pipeline.py) -> check divergence
 
+Before each step the clock (model.clock) is set to the step's time and the moving terrains moved
+there (world.py); a stage that evaluates forces at another time moves them to it first.
+
 Each integrator file binds its step in a two-line cached kernel, ``advance = drive(its_step,
 model, Motion(x, v), its_scratch(x), h, steps, pairs)``, where ``pairs`` is the state's pair list
 (state.State.pairs), returned for the next call.
@@ -32,6 +35,7 @@ from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
 from ..forces import force_columns
+from ..world import move_world, place_pins, start_step, step_time
 
 
 class Motion(NamedTuple):
@@ -54,9 +58,10 @@ def drive(step, model, state, scratch, h, steps, pairs):
     pairs = pairs_now(model, x, pairs)
     start = step_start(model, x)
     for done in range(steps):
+        start_step(model, x, v, done, h)   # the world (terrains, pins) at the step's start
         copy_positions(start, x)
         pairs = step(model, state, scratch, h, pairs)
-        pairs = collide(model, x, v, start, pairs)
+        pairs = collide(model, x, v, start, pairs, h)
         particle = first_diverged(x, v)
         if particle >= 0:
             return done + 1, particle, pairs
@@ -155,9 +160,12 @@ def is_diverged(vx, vy, vz, position):
 
 
 @inline_kernel
-def collide(model, x, v, start, pairs):
-    """Everything contact does after the integrator's update: terrain impacts, then body-body
-    contact (balls and surfaces in one set, from the step's ``start`` positions and the surface
-    pair list: collision/pipeline.py). Returns the pair list for the next step."""
+def collide(model, x, v, start, pairs, h):
+    """Everything contact does after the integrator's update: terrain impacts (with the
+    terrains where they are at the step's end), then body-body contact (balls and surfaces in
+    one set, from the step's ``start`` positions and the surface pair list:
+    collision/pipeline.py). Returns the pair list for the next step."""
+    move_world(model, step_time(model) + h)
+    place_pins(model, x, v)   # moving pins exactly on their paths at the step's end
     resolve_terrain_impacts(model, x, v)
     return resolve_contacts(model, x, v, start, pairs)

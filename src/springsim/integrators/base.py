@@ -64,6 +64,7 @@ class KernelIntegrator(Integrator):
         if partition_count(model.particle_count) > 1:
             numba.set_num_threads(threads)
             kernel = self.parallel_kernel
+        model.arrays.clock[0] = state.time   # the kernels' steps take their times from it
         done, particle, state.pairs = kernel(model.arrays, state.positions, state.velocities,
                                              float(dt), int(steps), state.pairs)
         return int(done), int(particle)

@@ -53,6 +53,8 @@ from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_ter
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..state import ContactMemory
+from ..wind import add_wind_forces, add_wind_jacobian
+from ..world import add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_time
 from .base import Integrator, register
 from ._steps import add_scaled, copy_positions, drive
 
@@ -100,6 +102,7 @@ class Workspace(NamedTuple):
     x_k: np.ndarray        # (P, 3) m: the estimate's positions x + h (v + dv)
     v_k: np.ndarray        # (P, 3) m/s: the estimate's velocities v + dv
     normal: np.ndarray     # (P, 3): each constrained particle's terrain normal
+    surface: np.ndarray    # (P, 3) m/s: the velocity of its terrain's surface there (world.py)
     reaction: np.ndarray   # (P, 3) N s: A ddv - b, the constraints' reaction impulses
     r: np.ndarray          # (P, 3): conjugate gradients' residual
     s: np.ndarray          # (P, 3): its search direction
@@ -132,6 +135,9 @@ def backward_euler_step(model, state, scratch, h, pairs):
     pass's surface pair list at x, which a self-colliding body's own contacts come from; the
     list at the step's end is returned."""
     work, settings = scratch.work, scratch.settings
+    # the constraints use the moving terrains where they are at the step's end (world.py)
+    move_world(model, step_time(model) + h)
+    aim_pins(model, state.x, state.v, h)   # moving pins: to their paths' points at the end
     contacts, own, pairs = find_step_contacts(model, state, scratch.solve_pairs, work, h, pairs)
     start_estimate(state, work)
     needed = newton_iterations_needed(model, contacts, state.v, h, settings.newton_iterations)
@@ -158,7 +164,7 @@ def find_step_contacts(model, state, solve_pairs, work, h, pairs):
     ``work.normal``) and its contact set; returns (the contact set, a self-colliding body's own
     pairs in contact at x, the post-step list at x)."""
     x, v, memory = state
-    find_constraints(model, x, v, h, memory.kind, work.normal, memory.terrain,
+    find_constraints(model, x, v, h, memory.kind, work.normal, work.surface, memory.terrain,
                      memory.normal_floor, memory.friction_damping)
     own, pairs = own_pairs_touching(model, x, pairs)
     contacts = find_solve_contacts(model, x, v, h, solve_pairs, own)
@@ -191,6 +197,8 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     assemble_diagonal_and_terms(model, pattern, work.x_k, 1.0, h, h * h, work.blocks, work.terms)
     newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
                work.rhs)
+    add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)
+    add_wind_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.blocks)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
     work.ddv[:] = 0.0
     for i in range(x.shape[0]):
@@ -199,10 +207,10 @@ def assemble_system(model, layout, state, work, contacts, h, first):
         memory.friction_damping[i] = 0.0
         if first:   # carried from the last step: back inside the friction cone
             damping = remembered_friction_in_cone(model, pattern, work.blocks, work.rhs, i,
-                                                  memory.kind, memory.terrain, work.normal, v,
-                                                  work.dv, work.ddv, damping)
-        set_friction_damping(i, damping, pattern, work.blocks, work.rhs, work.normal, v, work.dv,
-                             memory.friction_damping)
+                                                  memory.kind, memory.terrain, work.normal,
+                                                  work.surface, v, work.dv, work.ddv, damping)
+        set_friction_damping(i, damping, pattern, work.blocks, work.rhs, work.normal,
+                             work.surface, v, work.dv, memory.friction_damping)
 
 
 @kernel
@@ -215,6 +223,8 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
         for c in range(3):
             external = (m * model.gravity[c] if w > 0.0 else 0.0) - model.drag[i] * v_k[i, c]
             rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
+    add_pin_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft pins, at the step's end
+    add_wind_forces(model, x_k, v_k, np.full(1, h), rhs)  # the air, at the step's end
     if first:
         add_stiffness_product(model, x, v, h * h, rhs)
 
@@ -245,7 +255,7 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
         system_multiply(pattern, blocks, terms, contacts, ddv, q)
         add_scaled(work.reaction, q, -1.0, rhs)
         terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
-                                          normal, memory.terrain, normal_floor,
+                                          normal, work.surface, memory.terrain, normal_floor,
                                           memory.friction_damping, work.reaction)
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
@@ -299,6 +309,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     whole, as without the check."""
     if model.surface_triangles.shape[0] == 0:
         return backward_euler_step(model, state, scratch, h, pairs)
+    step_start = step_time(model)   # each part's own start time, for the moving terrains
     start = scratch.start
     copy_state(start, state)
     saved = start   # where the part being taken started
@@ -307,10 +318,12 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
+        model.clock[1] = step_start + h * done / whole
         stepped = backward_euler_step(model, state, scratch, h * size / whole, pairs)
         if carried_through(model, saved.x, state.x, stepped, scratch.solve_pairs):
             if size == 1:   # even the shortest part crossed: the step as it was
                 copy_state(state, start)
+                model.clock[1] = step_start
                 return backward_euler_step(model, state, scratch, h, pairs_at_start)
             copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
@@ -323,6 +336,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
         if done < whole:
             copy_state(scratch.part, state)
             saved = scratch.part
+    model.clock[1] = step_start   # the pass after the step takes its end from the step's start
     return pairs
 
 
@@ -356,11 +370,11 @@ def copy_state(out, state):
 def workspace(layout, x):
     """The arrays a step works in (Workspace)."""
     blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
-    vectors = [np.zeros_like(x) for _ in range(12)]
+    vectors = [np.zeros_like(x) for _ in range(13)]
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
     return Workspace(blocks, terms, vectors[0], force_columns(x), vectors[1], vectors[2],
                      vectors[3], vectors[4], vectors[5], vectors[6], vectors[7], vectors[8],
-                     vectors[9], vectors[10], vectors[11])
+                     vectors[9], vectors[10], vectors[11], vectors[12])
 
 
 @kernel
@@ -412,6 +426,7 @@ class ImplicitEuler(Integrator):
         if state.solve_pairs is None or state.solve_pairs.found_at.shape != state.positions.shape:
             state.solve_pairs = kept_surface_pairs(state.positions)
         settings = Settings(self.newton_iterations, self.cg_tolerance, self.cg_max_iterations)
+        model.arrays.clock[0] = state.time   # the steps take their times from it (world.py)
         done, particle, state.pairs = advance(
             model.arrays, self.pattern(model), settings,
             ImplicitState(state.positions, state.velocities, state.contacts), state.solve_pairs,

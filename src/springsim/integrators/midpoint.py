@@ -5,6 +5,7 @@
 """
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations
+from ..world import move_world, step_time
 from .base import KernelIntegrator, register
 from ._steps import add_scaled, Motion, drive, two_stage_scratch
 
@@ -16,6 +17,7 @@ def midpoint_step(model, state, scratch, h, pairs):
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_mid, x, h / 2, v)
     add_scaled(v_mid, v, h / 2, a)
+    move_world(model, step_time(model) + h / 2)   # moving terrains where the stage is
     accelerations(model, x_mid, v_mid, h, a, columns)
     add_scaled(x, x, h, v_mid)
     add_scaled(v, v, h, a)

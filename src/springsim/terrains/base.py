@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import is_finite, require
+from ..motion import Motion
 
 PARAMETERS = 10          # numbers per row of the parameter table
 KINDS: list = []         # terrain classes, by kind number
@@ -31,11 +32,16 @@ _registered: list = []   # (order, cls, names) as the kind files are imported
 
 @dataclass
 class Contact:
-    """Restitution, Coulomb friction and contact band shared by every terrain kind."""
+    """Restitution, Coulomb friction, contact band and motion shared by every terrain kind.
+
+    ``motion`` (motion.py) moves the terrain rigidly as a function of time; contact looks the
+    terrain up in its own frame (so a mesh's distance grid moves with it) and makes restitution
+    and friction relative to its surface velocity (world.py)."""
 
     restitution: float = 0.8
     friction: float = 0.3
     epsilon: float = 0.01
+    motion: Motion | None = None
 
     def validate_contact(self, key: str) -> None:
         require(is_finite(self.restitution) and 0 <= self.restitution <= 1,
@@ -44,6 +50,25 @@ class Contact:
                 self.friction, "must be >= 0")
         require(is_finite(self.epsilon) and self.epsilon > 0, f"{key}.epsilon", self.epsilon,
                 "must be > 0 m")
+        if self.motion is not None:
+            self.motion.validate(f"{key}.motion")
+
+    def anchor(self) -> tuple:
+        """The point a motion's rotation turns the terrain about unless it names a pivot."""
+        return (0.0, 0.0, 0.0)
+
+    def pose_at(self, t: float):
+        """(R, c, pivot) at time t: the terrain as placed at x is at c + R (x - pivot) (the
+        identity for a still terrain). For drawing and export."""
+        if self.motion is None:
+            return np.eye(3), np.zeros(3), np.zeros(3)
+        pose = self.motion.pose(t, self.anchor())
+        return pose[:9].reshape(3, 3), pose[9:12], pose[12:15]
+
+    def place_at(self, points, t: float) -> np.ndarray:
+        """``points`` of the terrain as placed, where they are at time t."""
+        rotation, center, pivot = self.pose_at(t)
+        return (np.asarray(points, float) - pivot) @ rotation.T + center
 
 
 def register(cls, names: dict, order: int):
@@ -66,7 +91,8 @@ def registered_kinds() -> list:
 
 def pack_terrains(terrains) -> dict:
     """Arrays the contact kernels read: a kind number, a parameter row and contact settings per
-    terrain, and the data buffer they share."""
+    terrain, the data buffer they share, and each terrain's row of the motion table (-1: it
+    stands still)."""
     count = len(terrains)
     packed = {"terrain_kind": np.zeros(count, np.int64),
               "terrain_parameters": np.zeros((count, PARAMETERS)),
@@ -83,4 +109,10 @@ def pack_terrains(terrains) -> dict:
         data.append(np.asarray(own, float).ravel())
         length += data[-1].size
     packed["terrain_data"] = np.concatenate(data)
+    # each moving terrain's row of the motion table (world.pack_world packs the motions in
+    # this order, then the pins')
+    packed["terrain_motion"] = np.full(count, -1, np.int64)
+    packed["terrain_motion"][[t for t, terrain in enumerate(terrains)
+                              if terrain.motion is not None]] = np.arange(
+        sum(terrain.motion is not None for terrain in terrains))
     return packed

@@ -149,6 +149,9 @@ class MeshTerrain(Contact):
     # a long lookup: contact does it a block of particles ahead (collision/response/terrain.py)
     look_ahead = True
 
+    def anchor(self) -> tuple:
+        return tuple(self.position)   # what a motion turns it about by default
+
     def validate(self, key: str) -> None:
         self.validate_contact(key)
         validate_placement(self, key)

@@ -23,6 +23,9 @@ class Plane(Contact):
 
     distance_kernel = plane_distance
 
+    def anchor(self) -> tuple:
+        return tuple(self.point)   # what a motion turns it about by default
+
     def validate(self, key: str) -> None:
         self.validate_contact(key)
         require(np.shape(self.point) == (3,) and is_finite(self.point), f"{key}.point",

@@ -37,6 +37,9 @@ class Sphere(Contact):
 
     distance_kernel = sphere_distance
 
+    def anchor(self) -> tuple:
+        return tuple(self.center)   # what a motion turns it about by default
+
     def validate(self, key: str) -> None:
         self.validate_contact(key)
         require(np.shape(self.center) == (3,) and is_finite(self.center), f"{key}.center",

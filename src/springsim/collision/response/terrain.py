@@ -1,6 +1,9 @@
 """Contact between particles and terrains.
 
-How contact enters an integrator, and why:
+How contact enters an integrator, and why (a terrain that moves, motion.py, is looked up where it
+is at the time the stage asks for, world.py, and every velocity below is relative to its
+surface's velocity at the contact point, rotation included: a body on a moving platform rides
+along by static friction, and a ball leaves a moving wall at e times their approach speed):
 
 1. Inside every force evaluation (every stage of a multi-stage method, on that stage's temporary
    state) a particle within the contact band (phi < epsilon) feels the terrain's reaction: the part
@@ -18,7 +21,8 @@ How contact enters an integrator, and why:
    endless chatter fed by a reaction doing positive work, with friction lost on every excursion
    (a cube resting on the plane kept vibrating that way, and one on a steep slope crept).
 2. After the whole step, an impact pass: a particle within the band that still approaches the
-   surface has its normal velocity reflected with restitution (v' = -e v_N + v_T), and a particle
+   surface has its normal velocity reflected with restitution (v' = -e v_N + v_T, v_N relative
+   to the surface's own velocity), and a particle
    that ended the step inside the surface is moved back onto it. A step of any size therefore ends
    with no penetration, whatever the integrator did in between; doing this once per step (not per
    stage) keeps stages smooth functions of the state, which is what their order relies on.
@@ -33,7 +37,8 @@ from numba import prange
 import numpy as np
 
 from ..._jit import inline_kernel, kernel
-from ...terrains import terrain_distance, terrain_looks_ahead
+from ...terrains import terrain_looks_ahead
+from ...world import surface_velocity, terrain_at
 
 
 BLOCK = 64   # particles whose terrain distances are looked up together (see apply_contact_forces)
@@ -64,13 +69,15 @@ def apply_contact_forces(model, x, v, h, a):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
-            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                               model.terrain_offset[i])
+            phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+                                         model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
-            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            # the velocity relative to the terrain's surface there (zero for a still terrain)
+            u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+            r0, r1, r2 = v[i, 0] - u0, v[i, 1] - u1, v[i, 2] - u2
+            v_n = r0 * nx + r1 * ny + r2 * nz
             # The reaction cancels the push into the surface; a particle already moving away
             # keeps the part of the push that stops it within this step (see module doc).
             reaction = -a_n - max(v_n, 0.0) / h
@@ -78,7 +85,7 @@ def apply_contact_forces(model, x, v, h, a):
                 continue  # pulled away from the surface, or leaving fast: no reaction, no friction
             # tangential acceleration and tangential (sliding) velocity
             ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
-            tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
+            tx, ty, tz = r0 - v_n * nx, r1 - v_n * ny, r2 - v_n * nz
             fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
             a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
             a[i, 0] = ax + fx + a_normal * nx
@@ -102,9 +109,8 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
             if ahead:
                 for i in range(start, stop):
                     found[i - start, 0], found[i - start, 1], found[i - start, 2], \
-                        found[i - start, 3] = terrain_distance(
-                            model.terrain_kind[t], model.terrain_parameters[t],
-                            model.terrain_data, x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+                        found[i - start, 3] = terrain_at(
+                            model, t, x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
             for i in range(start, stop):
                 if model.inv_mass[i] == 0.0:
                     continue
@@ -112,13 +118,14 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
                     phi, nx, ny, nz = found[i - start, 0], found[i - start, 1], \
                         found[i - start, 2], found[i - start, 3]
                 else:
-                    phi, nx, ny, nz = terrain_distance(
-                        model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
-                        x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+                    phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+                                                 model.terrain_offset[i])
                 if phi >= epsilon[t]:
                     continue
                 a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
-                v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+                u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+                r0, r1, r2 = v[i, 0] - u0, v[i, 1] - u1, v[i, 2] - u2
+                v_n = r0 * nx + r1 * ny + r2 * nz   # relative to the surface
                 # The reaction cancels the push into the surface; a particle already moving away
                 # keeps the part of the push that stops it within this step (see module doc).
                 reaction = -a_n - max(v_n, 0.0) / h
@@ -126,7 +133,7 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
                     continue  # pulled away, or leaving fast: no reaction, no friction
                 # tangential acceleration and tangential (sliding) velocity
                 ax, ay, az = a[i, 0] - a_n * nx, a[i, 1] - a_n * ny, a[i, 2] - a_n * nz
-                tx, ty, tz = v[i, 0] - v_n * nx, v[i, 1] - v_n * ny, v[i, 2] - v_n * nz
+                tx, ty, tz = r0 - v_n * nx, r1 - v_n * ny, r2 - v_n * nz
                 fx, fy, fz = coulomb_friction(ax, ay, az, tx, ty, tz, friction[t] * reaction, h)
                 a_normal = a_n + reaction  # -max(v_n, 0) / h: zero for a particle at rest
                 a[i, 0] = ax + fx + a_normal * nx
@@ -166,12 +173,12 @@ def resolve_terrain_impacts(model, x, v):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
-            phi, nx, ny, nz = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                               model.terrain_data, x[i, 0], x[i, 1], x[i, 2],
-                                               model.terrain_offset[i])
+            phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+                                         model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
-            v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
+            u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+            v_n = (v[i, 0] - u0) * nx + (v[i, 1] - u1) * ny + (v[i, 2] - u2) * nz   # relative
             if v_n < 0.0:
                 # slower than this, the rebound would stay in the band: resting contact (module doc)
                 resting_speed = math.sqrt(2.0 * g_size * epsilon[t])

@@ -1,0 +1,222 @@
+"""The world at a time: where the moving terrains and pins are, and contact looked up in the
+terrains' frames.
+
+Motion is a function of time alone (motion.py), so the kernels never carry it from step to
+step: a step (or a stage of one) calls ``move_world(model, t)`` for its own time, which writes
+every motion's pose into ``model.motion_pose``, and the contact kernels then call
+
+- ``terrain_at(model, t, x0, x1, x2, radius) -> (phi, nx, ny, nz)``: the signed distance and
+  normal of terrain t at the point, looked up in the terrain's own frame (x placed = R^T (y - c)
+  + pivot) so that any kind, a mesh's distance grid included, moves without being rebuilt;
+- ``surface_velocity(model, t, x0, x1, x2) -> (ux, uy, uz)``: how fast the terrain's surface
+  moves there, c' + w x (y - c) (zero for a still terrain), which restitution and friction are
+  relative to.
+
+A still terrain (terrain_motion -1) is looked up directly, as before motion existed: the same
+arithmetic, the same bits.
+
+Which time each integrator asks for: every step starts the world at the step's start
+(integrators/_steps.drive); the explicit methods move it to each stage's time before that
+stage's forces (midpoint: t + h/2; rk4: t + h/2, t + h/2, t + h); backward Euler moves it to the
+step's end, t + h, before it finds its constraints (the constraint uses the collider where it is
+at the step's end); the impact pass after every step is at t + h.
+
+Pins that move (bodies/pins.py) are hard: their particles have no inverse mass, so no force
+moves them; ``place_pins`` puts each exactly on its path (at the path's velocity) at the start
+of every step and again at its end, whatever the integrator did in between (an explicit method's
+stages carry it along at that velocity). Backward Euler holds a pinned particle's velocity as
+the solve finds it, so ``aim_pins`` first gives it the velocity that reaches the path's point
+at the step's end: the springs feel the pin move within the step.
+
+A soft pin (``stiffness``, ``damping``) is a spring of its own from the particle to its path's
+point, with a damper against the velocity relative to the path: a force k (p - x) + d (u - v),
+in every stage's forces at the stage's time (``add_pin_forces``) and in backward Euler's solve
+at the step's end with its derivative (``add_pin_jacobian``).
+"""
+import numpy as np
+
+from ._jit import inline_kernel, kernel
+from .bodies.pins import followed_terrain
+from .motion import POSE, Motion, pack_motions, pose_into
+from .terrains import terrain_distance
+
+
+def pack_world(terrains, built, offsets) -> dict:
+    """The model's arrays of the moving world: the motions of the moving terrains (in the
+    order of their terrain_motion rows) and of the pins that move (bodies/pins.py), their
+    poses at time 0, and each moving pin's particles. A pin that follows a terrain takes that
+    terrain's row; one that follows a still terrain just holds."""
+    motions = [(terrain.motion, terrain.anchor()) for terrain in terrains
+               if terrain.motion is not None]
+    rows = {t: r for r, t in enumerate(t for t, terrain in enumerate(terrains)
+                                       if terrain.motion is not None)}
+    particles, rows_of_pins, placed, stiffness, damping = [], [], [], [], []
+    for body, start in zip(built, offsets):
+        for chosen, pin in body.moving_pins:
+            where = body.positions[chosen]
+            if pin.motion is not None or not pin.follow:   # a soft pin that holds: no motion
+                row = len(motions)
+                motions.append((pin.motion or Motion(), where.mean(axis=0)))
+            else:
+                terrain = terrains[followed_terrain(pin)]
+                row = rows.get(followed_terrain(pin), -1)
+                if row < 0:
+                    continue   # it follows a terrain that stands still: a pin that holds
+                # they keep the place they start at in the terrain's frame: where that place
+                # was when the terrain was placed, x = R0^T (x_start - c0) + pivot
+                pose = terrain.motion.pose(0.0, terrain.anchor())
+                where = (where - pose[9:12]) @ pose[:9].reshape(3, 3) + pose[12:15]
+            particles.append(chosen + start)
+            rows_of_pins.append(np.full(len(chosen), row, np.int64))
+            placed.append(where)
+            soft = pin.stiffness is not None
+            stiffness.append(np.full(len(chosen), float(pin.stiffness) if soft else 0.0))
+            damping.append(np.full(len(chosen), float(pin.damping) if soft else 0.0))
+    info, keys = pack_motions(motions)
+    poses = np.array([motion.pose(0.0, anchor) for motion, anchor in motions]).reshape(-1, POSE)
+    return {"motion_info": info, "motion_keys": keys, "motion_pose": poses,
+            "pin_particles": np.concatenate([np.zeros(0, np.int64)] + particles),
+            "pin_motion": np.concatenate([np.zeros(0, np.int64)] + rows_of_pins),
+            "pin_placed": np.concatenate([np.zeros((0, 3))] + placed),
+            "pin_stiffness": np.concatenate([np.zeros(0)] + stiffness),
+            "pin_damping": np.concatenate([np.zeros(0)] + damping)}
+
+
+@kernel
+def move_world(model, t):
+    """Write every motion's pose at time t (s) into model.motion_pose; the wind reads t from
+    model.clock[2]."""
+    model.clock[2] = t
+    for m in range(model.motion_info.shape[0]):
+        pose_into(model.motion_info, model.motion_keys, m, t, model.motion_pose[m])
+
+
+@kernel
+def step_time(model):
+    """The time of the step being taken (s)."""
+    return model.clock[1]
+
+
+@kernel
+def start_step(model, x, v, done, h):
+    """Set the clock to step ``done`` of this call (step size h), move the world there and put
+    the moving pins on their paths. The time is the call's start plus done h: a function of
+    the state's time alone."""
+    t = model.clock[0] + done * h
+    model.clock[1] = t
+    move_world(model, t)
+    place_pins(model, x, v)
+
+
+@kernel
+def place_pins(model, x, v):
+    """Every moving pin's particle exactly where its motion has it now (the pose last moved
+    to), at the motion's velocity there."""
+    for q in range(model.pin_particles.shape[0]):
+        if model.pin_stiffness[q] > 0.0:
+            continue   # a soft pin: a spring to its path (pin_accelerations)
+        i, p = model.pin_particles[q], model.motion_pose[model.pin_motion[q]]
+        d0 = model.pin_placed[q, 0] - p[12]
+        d1 = model.pin_placed[q, 1] - p[13]
+        d2 = model.pin_placed[q, 2] - p[14]
+        r0 = p[0] * d0 + p[1] * d1 + p[2] * d2   # R (x_start - pivot)
+        r1 = p[3] * d0 + p[4] * d1 + p[5] * d2
+        r2 = p[6] * d0 + p[7] * d1 + p[8] * d2
+        x[i, 0], x[i, 1], x[i, 2] = p[9] + r0, p[10] + r1, p[11] + r2
+        v[i, 0] = p[15] + p[19] * r2 - p[20] * r1
+        v[i, 1] = p[16] + p[20] * r0 - p[18] * r2
+        v[i, 2] = p[17] + p[18] * r1 - p[19] * r0
+
+
+@kernel
+def aim_pins(model, x, v, h):
+    """Backward Euler's pins (world.py's doc): each moving pin's velocity for this step is the
+    one that takes it from x to where its motion has it at the step's end (the pose last moved
+    to), since the solve holds a pinned particle's velocity as it finds it."""
+    for q in range(model.pin_particles.shape[0]):
+        if model.pin_stiffness[q] > 0.0:
+            continue
+        i, p = model.pin_particles[q], model.motion_pose[model.pin_motion[q]]
+        d0 = model.pin_placed[q, 0] - p[12]
+        d1 = model.pin_placed[q, 1] - p[13]
+        d2 = model.pin_placed[q, 2] - p[14]
+        v[i, 0] = (p[9] + p[0] * d0 + p[1] * d1 + p[2] * d2 - x[i, 0]) / h
+        v[i, 1] = (p[10] + p[3] * d0 + p[4] * d1 + p[5] * d2 - x[i, 1]) / h
+        v[i, 2] = (p[11] + p[6] * d0 + p[7] * d1 + p[8] * d2 - x[i, 2]) / h
+
+
+@inline_kernel
+def terrain_at(model, t, x0, x1, x2, radius):
+    """Signed distance (m) from a particle's surface to terrain t at its current pose, and the
+    unit normal (world frame)."""
+    if model.terrain_motion[t] < 0:
+        return terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                model.terrain_data, x0, x1, x2, radius)
+    p = model.motion_pose[model.terrain_motion[t]]
+    # y - c, then R^T (y - c) + pivot: the point where the terrain was placed in the scene
+    d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
+    l0 = p[0] * d0 + p[3] * d1 + p[6] * d2 + p[12]
+    l1 = p[1] * d0 + p[4] * d1 + p[7] * d2 + p[13]
+    l2 = p[2] * d0 + p[5] * d1 + p[8] * d2 + p[14]
+    phi, m0, m1, m2 = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
+                                       model.terrain_data, l0, l1, l2, radius)
+    return (phi, p[0] * m0 + p[1] * m1 + p[2] * m2, p[3] * m0 + p[4] * m1 + p[5] * m2,
+            p[6] * m0 + p[7] * m1 + p[8] * m2)
+
+
+@inline_kernel
+def surface_velocity(model, t, x0, x1, x2):
+    """Velocity (m/s) of terrain t's material at the world point (x0, x1, x2): c' + w x (y - c)."""
+    if model.terrain_motion[t] < 0:
+        return 0.0, 0.0, 0.0
+    p = model.motion_pose[model.terrain_motion[t]]
+    d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
+    w0, w1, w2 = p[18], p[19], p[20]
+    return (p[15] + w1 * d2 - w2 * d1, p[16] + w2 * d0 - w0 * d2, p[17] + w0 * d1 - w1 * d0)
+
+
+@kernel
+def pin_target(model, q):
+    """Where moving pin q's path is now (the pose last moved to), and its velocity there."""
+    p = model.motion_pose[model.pin_motion[q]]
+    d0 = model.pin_placed[q, 0] - p[12]
+    d1 = model.pin_placed[q, 1] - p[13]
+    d2 = model.pin_placed[q, 2] - p[14]
+    r0 = p[0] * d0 + p[1] * d1 + p[2] * d2
+    r1 = p[3] * d0 + p[4] * d1 + p[5] * d2
+    r2 = p[6] * d0 + p[7] * d1 + p[8] * d2
+    return (p[9] + r0, p[10] + r1, p[11] + r2, p[15] + p[19] * r2 - p[20] * r1,
+            p[16] + p[20] * r0 - p[18] * r2, p[17] + p[18] * r1 - p[19] * r0)
+
+
+@kernel
+def add_pin_forces(model, x, v, scale, out):
+    """out[i] += scale_i (k (target - x_i) + d (target velocity - v_i)) for every soft pin's
+    particle i: ``scale`` per particle (the inverse masses, for accelerations) or, with one
+    entry, for all (the step h, for backward Euler's impulses)."""
+    for q in range(model.pin_particles.shape[0]):
+        k, d = model.pin_stiffness[q], model.pin_damping[q]
+        if k == 0.0:
+            continue
+        i = model.pin_particles[q]
+        t0, t1, t2, u0, u1, u2 = pin_target(model, q)
+        w = scale[i] if scale.shape[0] > 1 else scale[0]
+        out[i, 0] += w * (k * (t0 - x[i, 0]) + d * (u0 - v[i, 0]))
+        out[i, 1] += w * (k * (t1 - x[i, 1]) + d * (u1 - v[i, 1]))
+        out[i, 2] += w * (k * (t2 - x[i, 2]) + d * (u2 - v[i, 2]))
+
+
+@kernel
+def add_pin_jacobian(model, diagonal_slot, h, first, v, blocks, rhs):
+    """Backward Euler's soft pins: A gains h d + h^2 k on each pinned particle's diagonal (the
+    pin's -h dF/dv - h^2 dF/dx), and the first iteration's right-hand side its h^2 dF/dx v."""
+    for q in range(model.pin_particles.shape[0]):
+        k, d = model.pin_stiffness[q], model.pin_damping[q]
+        if k == 0.0:
+            continue
+        i = model.pin_particles[q]
+        slot = diagonal_slot[i]
+        for c in range(3):
+            blocks[slot, c, c] += h * d + h * h * k
+            if first:
+                rhs[i, c] -= h * h * k * v[i, c]
