@@ -64,7 +64,7 @@ def moving_mesh() -> None:
         for name, motion in (("still", None),
                              ("turning", Motion(angular_velocity=(0.0, 0.05, 0.0)))):
             terrain = MeshTerrain(file=str(path), resolution=128, motion=motion)
-            scenes[name] = Scene(bodies=[Cube(position=(0.0, 1.05, 0.0))], terrains=[terrain])
+            scenes[name] = Scene(bodies=[Cube(position=(0.0, 1.25, 0.0))], terrains=[terrain])
         for integrator, dt, steps in (("rk4", 1e-3, 400), ("implicit_euler", 1 / 60, 30)):
             times = step_times(scenes, integrator, dt, steps)
             print(f"moving mesh terrain, {integrator}: still {times['still'] * 1e3:.3f} ms, "

@@ -14,7 +14,7 @@ from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
 from .terrains import pack_terrains
-from .wind import pack_wind
+from .wind import pack_wind, quads_both_ways
 from .world import pack_world
 
 
@@ -62,6 +62,7 @@ class ModelArrays(NamedTuple):
     wind_keys: np.ndarray        # (K, 4) time, velocity
     wind_modes: np.ndarray       # (G, 8)
     wind_triangles: np.ndarray   # (W, 3) int64 particle numbers
+    wind_weights: np.ndarray     # (W,) the share of each triangle's force that acts (wind.py)
     # Ball contacts (collision/pipeline.py). A ball is a particle with radius > 0 (only Balls
     # bodies give radii); every other particle is a point.
     balls: np.ndarray = np.empty(0, np.int64)                 # (B,) particle numbers, ascending
@@ -184,7 +185,7 @@ def build_model(scene) -> Model:
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
-        clock=np.zeros(3), **pack_wind(scene.wind), wind_triangles=wind_triangles(scene, built, offsets),
+        clock=np.zeros(3), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
@@ -227,16 +228,18 @@ def sheet_arrays(built, offsets) -> dict:
             "particle_triangles": (order // 3).astype(np.int64)}
 
 
-def wind_triangles(scene, built, offsets) -> np.ndarray:
+def wind_surface(scene, built, offsets) -> dict:
     """The triangles of particles the wind blows on (none without wind): each body's surface,
-    or its contact surface where the drawn one is embedded (a mesh body's lattice boundary)."""
+    or its contact surface where the drawn one is embedded (a mesh body's lattice boundary);
+    with their weights (wind.quads_both_ways)."""
     triangles = [np.empty((0, 3), np.int64)]
     if scene.wind is not None:
         for b, start in zip(built, offsets):
             own = sheet_surface(b) if b.embedding is None else b.collision_surface
             if own is not None and len(own):
                 triangles.append(np.asarray(own, np.int64) + start)
-    return np.concatenate(triangles)
+    triangles, weights = quads_both_ways(np.concatenate(triangles))
+    return {"wind_triangles": triangles, "wind_weights": weights}
 
 
 def sheet_surface(built) -> np.ndarray:

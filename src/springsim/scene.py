@@ -83,7 +83,10 @@ def check_bodies_outside_terrains(model) -> None:
         x = model.initial_positions[body.start:body.stop]
         radii = model.arrays.terrain_offset[body.start:body.stop]
         for t, terrain in enumerate(model.terrains):
-            distance = terrain.signed_distance(x, radii)
+            # where the terrain is at time 0: the points looked up in its placed frame
+            rotation, center, pivot = terrain.pose_at(0.0)
+            placed = (x - center) @ rotation + pivot if terrain.motion is not None else x
+            distance = terrain.signed_distance(placed, radii)
             deepest = int(np.argmin(distance))
             key, value = _placement(model.scene_bodies[body_index], f"bodies.{body_index}",
                                     deepest)

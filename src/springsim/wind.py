@@ -13,8 +13,10 @@ On a triangle of area A and unit normal n, with w the air's velocity relative to
 
     F = 1/2 rho C_d A |w_n| w_n n  +  1/2 rho C_f A |w_t| w_t,   w_n = w . n,  w_t = w - w_n n
 
-shared equally among its three corners (a flat plate falling face-down reaches the terminal
-speed sqrt(2 m g / (rho C_d A))). A ball feels 1/2 rho C_d pi r^2 |w| w.
+shared equally among its three corners (a quad counts as both its triangulations at half
+weight: ``quads_both_ways``), so that a flat sheet whose mass is spread by area falls flat and
+reaches the flat-plate terminal speed sqrt(2 m g / (rho C_d A)). A ball feels
+1/2 rho C_d pi r^2 |w| w.
 
 Backward Euler takes the force at the step's end with its derivative in the corners' own
 velocities, the diagonal blocks h (1/9) (rho C_d A |w_n| n n^T + rho C_f A |w_t| (I - n n^T))
@@ -89,6 +91,28 @@ class Wind:
                     f"{key}.gusts.strength", self.gusts.strength, "must be >= 0")
             require(is_finite(self.gusts.length) and self.gusts.length > 0,
                     f"{key}.gusts.length", self.gusts.length, "must be > 0 m")
+
+
+def quads_both_ways(triangles: np.ndarray):
+    """(triangles, weights): each quad that a fan split into (a, b, c) and (a, c, d) split both
+    ways, its four triangles at weight 1/2, so that each corner takes a quarter of its force (a
+    fan alone gives the corners on its diagonal twice the others' share, and folds a falling
+    sheet along it); other triangles at weight 1."""
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    second = {(int(t[0]), int(t[1])): k for k, t in enumerate(triangles)}   # (a, c) of (a, c, d)
+    out, weights, used = [], [], np.zeros(len(triangles), bool)
+    for k, (a, b, c) in enumerate(triangles):
+        j = second.get((int(a), int(c)), -1)
+        if used[k] or j < 0 or j == k or used[j]:
+            continue
+        d = triangles[j, 2]
+        out += [(a, b, c), (a, c, d), (a, b, d), (b, c, d)]
+        weights += [0.5] * 4
+        used[k] = used[j] = True
+    for k in np.flatnonzero(~used):
+        out.append(tuple(triangles[k]))
+        weights.append(1.0)
+    return np.array(out, np.int64).reshape(-1, 3), np.array(weights, float)
 
 
 def pack_wind(wind: Wind | None) -> dict:
@@ -201,8 +225,9 @@ def add_wind_forces(model, x, v, scale, out):
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
         f0, f1, f2, _, _, _, _, _ = triangle_wind(model, x, v, a, b, c, t)
+        share = model.wind_weights[k] / 3.0
         for i in (a, b, c):
-            w = (scale[i] if scale.shape[0] > 1 else scale[0]) / 3.0
+            w = (scale[i] if scale.shape[0] > 1 else scale[0]) * share
             out[i, 0] += w * f0
             out[i, 1] += w * f1
             out[i, 2] += w * f2
@@ -224,6 +249,7 @@ def add_wind_jacobian(model, diagonal_slot, x, v, h, blocks):
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
         _, _, _, normal, along, n0, n1, n2 = triangle_wind(model, x, v, a, b, c, t)
+        normal, along = normal * model.wind_weights[k], along * model.wind_weights[k]
         n = (n0, n1, n2)
         for i in (a, b, c):
             slot = diagonal_slot[i]
