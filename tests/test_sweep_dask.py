@@ -110,8 +110,8 @@ def test_a_worker_killed_mid_sweep_costs_no_row(cluster, small_drop):
 
 def test_no_scheduler_at_the_address_is_one_line(capsys, small_drop, monkeypatch, tmp_path):
     monkeypatch.setattr("springsim.runner.CONNECT_TIMEOUT", "1s")
-    code = main(["sweep", small_drop, "--vary", "drag=0,1", "--dask", "tcp://127.0.0.1:9",
-                 "--out", str(tmp_path / "out")])
+    code = main(["sweep", small_drop, "--set", "dt=0.001", "--vary", "drag=0,1", "--dask",
+                 "tcp://127.0.0.1:9", "--out", str(tmp_path / "out")])
     error = capsys.readouterr().err
     assert code == 2 and error.count("\n") == 1
     assert error.startswith("springsim sweep: --dask = 'tcp://127.0.0.1:9': no Dask scheduler")

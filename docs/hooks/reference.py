@@ -118,11 +118,17 @@ NOTES = {
     "bodies/cloth/material.bend_damping": ("N s/m", "each bend spring's damping"),
     "bodies/cloth/pins": ("", "the `[[bodies.pins]]` tables: more pinned particles, each "
                               "chosen one way"),
-    "bodies/cloth/pins.N.particles": ("", "particle numbers to pin"),
-    "bodies/cloth/pins.N.region": ("", "a box; the particles that start inside it are pinned"),
-    "bodies/cloth/pins.N.region.min": ("m", "the box's lowest corner"),
-    "bodies/cloth/pins.N.region.max": ("m", "the box's highest corner"),
-    "bodies/cloth/pins.N.group": ("", "an OBJ group (`g` or `o` name) of the cloth's file"),
+    "bodies/*/pins.N.particles": ("", "particle numbers to pin"),
+    "bodies/*/pins.N.region": ("", "a box; the particles that start inside it are pinned"),
+    "bodies/*/pins.N.region.min": ("m", "the box's lowest corner"),
+    "bodies/*/pins.N.region.max": ("m", "the box's highest corner"),
+    "bodies/*/pins.N.group": ("", "an OBJ group (`g` or `o` name) of the body's mesh file"),
+    "bodies/*/pins.N.motion": ("", "moves the pinned particles as a function of time (the "
+                                   "keys below)"),
+    "bodies/*/pins.N.follow": ("", '"terrains.N": the pinned particles move with that terrain'),
+    "bodies/*/pins.N.stiffness": ("N/m", "a soft pin: a spring to the pin's place; left out, "
+                                         "the pin is hard"),
+    "bodies/*/pins.N.damping": ("N s/m", "a soft pin's damper"),
     "bodies/cloth/width": ("m", "size along the sheet's local x axis"),
     "bodies/cloth/height": ("m", "size along the sheet's local z axis"),
     "bodies/*/drag": ("N s/m", "the body's own viscous drag, added to the scene's `drag`"),
@@ -159,7 +165,36 @@ NOTES = {
     "terrains/bowl/center": ("m", "centre; bodies stay inside it"),
     "terrains/*/radius": ("m", "radius"),
     "terrains/*/mass": ("kg", "kept for the course framework; unused"),
+    "scene/*/wind.velocity": ("m/s", "the air's constant velocity"),
+    "scene/*/wind.keyframes": ("", "the `[[wind.keyframes]]` tables: the air's velocity at "
+                                   "given times, linear between them and held outside them"),
+    "scene/*/wind.keyframes.N.time": ("s", "the keyframe's time (required, increasing)"),
+    "scene/*/wind.keyframes.N.velocity": ("m/s", "the air's velocity at that time"),
+    "scene/*/wind.density": ("kg/m³", "the air's density"),
+    "scene/*/wind.drag": ("", "drag coefficient of the air's motion across a surface"),
+    "scene/*/wind.friction": ("", "friction coefficient of the air's motion along a surface"),
+    "scene/*/wind.gusts": ("", "seeded turbulence, the same in every run"),
+    "scene/*/wind.gusts.strength": ("", "gust speed as a share of the mean wind speed (m/s in "
+                                        "still air)"),
+    "scene/*/wind.gusts.length": ("m", "the size of a gust"),
+    "scene/*/wind.gusts.seed": ("", "the seed of the gusts' random field"),
 }
+MOTION_NOTES = {
+    "motion.keyframes": ("", "the `[[...motion.keyframes]]` tables: poses at given times"),
+    "motion.keyframes.N.time": ("s", "the keyframe's time (required, increasing)"),
+    "motion.keyframes.N.position": ("m", "displacement at that time"),
+    "motion.keyframes.N.rotation_degrees": ("degrees", "rotation at that time, about "
+                                                       "`rotation_axis` through the pivot"),
+    "motion.keyframes.N.rotation_axis": ("", "axis of that rotation (any length but zero)"),
+    "motion.interpolation": ("", '"linear", or "smooth": a C1 cubic through the keyframes '
+                                 "that starts and ends at rest"),
+    "motion.velocity": ("m/s", "a constant velocity instead of keyframes"),
+    "motion.angular_velocity": ("rad/s", "a constant angular velocity about the pivot"),
+    "motion.pivot": ("m", "the point the rotations turn about; left out, the terrain's anchor "
+                          "(a sphere's centre, a plane's point) or the pinned particles' centre"),
+}
+NOTES |= {f"terrains/*/{key}": note for key, note in MOTION_NOTES.items()}
+NOTES |= {f"bodies/*/pins.N.{key}": note for key, note in MOTION_NOTES.items()}
 
 
 def group_type_key(scene_key):

@@ -381,8 +381,17 @@ def _table_keys(node, prefix: str, owner: str) -> list[SceneKey]:
         elif is_table_list(value):
             keys += _table_keys(value[0], f"{path}.N", owner)
         elif (table := _unset_table(annotation)) is not None:   # `X | None` or `list[X]`
-            keys += _table_keys(table[0](), path + table[1], owner)
+            keys += _table_keys(_with_required_unset(table[0]), path + table[1], owner)
     return keys
+
+
+def _with_required_unset(table):
+    """An instance of a table's dataclass with its required keys (a keyframe's ``time``) None,
+    which the reference shows as having no default."""
+    required = {name: None for name, field in init_fields(table).items()
+                if field.default is dataclasses.MISSING
+                and field.default_factory is dataclasses.MISSING}
+    return table(**required)
 
 
 def _unset_table(annotation):
@@ -411,7 +420,7 @@ def _kind_text(annotation, default) -> str:
     if annotation is np.ndarray:
         return "array"
     if annotation in (tuple, list) or typing.get_origin(annotation) in (tuple, list):
-        if is_table_list(default):
+        if is_table_list(default) or _unset_table(annotation) is not None:
             return "array of tables"
         if isinstance(default, (tuple, list)) and default and all(
                 isinstance(item, float) for item in default):

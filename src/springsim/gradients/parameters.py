@@ -34,6 +34,8 @@ from .physics import Physical
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
            "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
            "terrain_restitution"}
+# The model's work space, which the kernels write while they run (model.py): not a parameter
+WORK_SPACE = {"clock", "motion_pose"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
 # Physical's fields with a cotangent (physics.Cotangents), which a SceneValue's tangents cover
 DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution")
@@ -120,7 +122,7 @@ class SceneValue:
 def check_covered(key, model, changed):
     """Refuse a key that changes a model array the adjoint does not cover."""
     for field in model.arrays._fields:
-        if field in COVERED:
+        if field in COVERED or field in WORK_SPACE:
             continue
         old, new = getattr(model.arrays, field), getattr(changed.arrays, field)
         if np.shape(old) != np.shape(new) or not np.array_equal(old, new):
