@@ -10,7 +10,7 @@ from springsim.errors import SceneError
 from springsim.forces import forces
 from springsim.model import build_model
 from springsim.scene import Scene
-from springsim.springs import SpringKind, SpringParameters
+from springsim.springs import SpringKind
 from springsim.terrains import Plane
 
 

@@ -22,7 +22,7 @@ from springsim import Simulation, load_scene
 from springsim.cli import main
 from springsim.errors import SceneError, SimulationDiverged
 from springsim.integrators import integrator_names
-from springsim.scenefile import BODY_TYPES, TERRAIN_TYPES, scene_from_table
+from springsim.scenefile import TERRAIN_TYPES, scene_from_table
 
 settings.register_profile("dev", max_examples=150, deadline=timedelta(seconds=20),
                           suppress_health_check=[HealthCheck.too_slow,

@@ -9,7 +9,6 @@ virtual display (Xvfb) `springsim play` opens a GLFW window whose screenshot sho
 the orange cube.
 """
 
-import imageio.v3 as iio
 import numpy as np
 import polyscope as ps
 import pytest

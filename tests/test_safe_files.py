@@ -8,7 +8,6 @@ is never followed (the file it points to is unchanged); SIGTERM during a write l
 file and no temporary file, and the command exits 143.
 """
 import os
-import resource
 import signal
 import subprocess
 import sys
