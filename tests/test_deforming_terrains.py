@@ -291,3 +291,40 @@ def test_mdd_and_pc2_of_the_same_samples_read_the_same(tmp_path):
     mdd = Animation(str(tmp_path / "a.mdd"), start=0.5).cache()
     assert np.allclose(pc2.times, mdd.times, atol=1e-6) and np.array_equal(pc2.points, mdd.points)
     assert pc2.times[0] == 0.5 and pc2.times[-1] == pytest.approx(0.6)
+
+
+def test_usd_export_moves_the_terrains_with_the_take(platform_files, tmp_path):
+    """A take exported to USD has each moving terrain's points at every frame where its motion
+    (a sphere) or its cache (the plate, linear between samples) has them at that frame's time."""
+    from pxr import Usd, UsdGeom
+
+    from springsim.cli import main
+
+    folder, _, _ = platform_files
+    (folder / "both.toml").write_text(CUBE.format(dt=1 / 60, integrator="implicit_euler") + """
+duration = 0.5
+[[terrains]]
+type = "mesh"
+file = "plate.obj"
+[terrains.animation]
+file = "plate.pc2"
+[[terrains]]
+type = "sphere"
+center = [3.0, 0.0, 0.0]
+radius = 0.5
+[terrains.motion]
+velocity = [0.0, 1.0, 0.0]
+""")
+    take, usd = tmp_path / "both.npz", tmp_path / "both.usda"
+    assert main(["run", str(folder / "both.toml"), "--quiet", "--fps", "20", "--out",
+                 str(take)]) == 0
+    assert main(["export", "--quiet", str(take), str(usd)]) == 0
+    stage = Usd.Stage.Open(str(usd))
+    plate_points = UsdGeom.Mesh(stage.GetPrimAtPath("/take/terrains/terrain_0_meshterrain"))
+    sphere = UsdGeom.Mesh(stage.GetPrimAtPath("/take/terrains/terrain_1_sphere"))
+    cache = Animation(str(folder / "plate.pc2")).cache()
+    for frame, t in enumerate(np.arange(11) / 20):
+        points = np.asarray(plate_points.GetPointsAttr().Get(frame + 1), float)
+        np.testing.assert_allclose(points, interpolated_points(cache, t)[0], atol=1e-6)
+        centre = np.asarray(sphere.GetPointsAttr().Get(frame + 1), float).mean(axis=0)
+        np.testing.assert_allclose(centre, [3.0, t, 0.0], atol=1e-5)
