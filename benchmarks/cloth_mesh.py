@@ -10,7 +10,8 @@ the grid cloth of the same particle count, within 10%; a hanging cloth's sag at 
   simulation (reading, welding, springs, model) in a fresh process each time.
 - speed: steps per second of the 100 x 100 grid cloth, of the same grid read from a quad OBJ, and
   of an irregular triangle mesh with the same particle count, measured alternately (the machine's
-  speed drifts), under rk4 (dt 1e-4) and implicit_euler (dt 1/60); ratios mesh / grid per round.
+  speed drifts), under rk4 (dt 1e-4) and implicit_euler (dt 1/60); ratios mesh / grid per round,
+  and each cloth's spring layout (runs, holes in them, loose springs).
 - sag: a 1 m square cloth of a soft material hanging from its top edge, to rest under
   implicit_euler; the drop of its bottom edge below its pinned edge at 50 x 50 and 100 x 100.
 """
@@ -104,6 +105,12 @@ def steps_per_second(simulation, steps: int) -> float:
     return steps / (time.perf_counter() - start)
 
 
+def run_layout(arrays) -> list:
+    """How the springs are laid out for the force loop (spring_runs.py): runs, holes, loose."""
+    return [len(arrays.spring_runs), int((arrays.run_rest_length < 0).sum()),
+            len(arrays.loose_springs)]
+
+
 def part_speed(folder: Path, repeats: int) -> dict:
     from springsim.bodies.cloth import Cloth
 
@@ -127,6 +134,8 @@ def part_speed(folder: Path, repeats: int) -> dict:
         result[integrator] = {
             "particles": {name: s.model.particle_count for name, s in simulations.items()},
             "springs": {name: len(s.model.springs) for name, s in simulations.items()},
+            "runs_holes_loose": {name: run_layout(s.model.arrays)
+                                 for name, s in simulations.items()},
             "steps_per_s": rates,
             "ratio_to_grid": {name: [r / g for r, g in zip(rates[name], rates["grid"])]
                               for name in cloths if name != "grid"}}

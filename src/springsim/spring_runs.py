@@ -132,7 +132,7 @@ def add_run_forces(model, columns):
                                     model.group_ks[group], model.group_kd[group])
 
 
-@kernel
+@inline_kernel
 def add_stretch_forces(columns, a, b, count, rest_length, ks, kd, stop):
     """Springs (a + i, b + i) for i < count: each row read at a and at b as a contiguous slice;
     the second ends at or past ``stop`` (another partition's) are left out."""
@@ -147,7 +147,7 @@ def add_stretch_forces(columns, a, b, count, rest_length, ks, kd, stop):
     subtract_from_second_ends(columns, b, max(0, min(count, stop - b)), fx, fy, fz)
 
 
-@kernel
+@inline_kernel
 def add_crossing_forces(columns, a, b, count, rest_length, ks, kd):
     """Springs (a + i, b + i) for i < count: the force on the second ends alone."""
     # scratch in the rows of the second ends: this partition's own
@@ -156,7 +156,7 @@ def add_crossing_forces(columns, a, b, count, rest_length, ks, kd):
     subtract_from_second_ends(columns, b, count, fx, fy, fz)
 
 
-@kernel
+@inline_kernel
 def stretch_forces(columns, a, b, count, rest_length, ks, kd, fx, fy, fz):
     """(fx, fy, fz)[i] = the force on a + i of spring (a + i, b + i), i < count."""
     x_a, y_a, z_a = columns[0, a:a + count], columns[1, a:a + count], columns[2, a:a + count]
@@ -173,7 +173,7 @@ def stretch_forces(columns, a, b, count, rest_length, ks, kd, fx, fy, fz):
             fx[i], fy[i], fz[i] = 0.0, 0.0, 0.0
 
 
-@kernel
+@inline_kernel
 def subtract_from_second_ends(columns, b, count, fx, fy, fz):
     """Force rows at b + i -= (fx, fy, fz)[i], i < count: in a loop of its own, since b + i may
     be a + j of another i, which the loop over the springs could not vectorize across."""

@@ -16,7 +16,7 @@ with the coefficients rows p, q, l_x, l_y, l_z (a hole of a run: all zero).
 """
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..spring_runs import TILE
 
 TERM_ROWS = 9   # rows of the work columns: u, the product, scratch
@@ -82,7 +82,7 @@ def add_loose_products(loose_pairs, coefficients, u, out):
         out[b, 2] -= p * lu_a * l2 + q * u[a, 2]
 
 
-@kernel
+@inline_kernel
 def add_stretch_products(columns, a, b, count, coefficients, entry):
     """Springs (a + i, b + i), i < count, whose coefficients start at ``entry``: C u_b
     (C = p l l^T + q I) off row a + i, C u_a off row b + i, each row read as a contiguous
