@@ -1,16 +1,18 @@
 """The `springsim` command line. Each subcommand is one module in ``springsim.commands`` that
 defines ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; a new command is a
 new file there. Modules import their heavy dependencies inside ``run`` so that start-up stays fast.
+
+Ctrl-C and SIGTERM are taken over (signals.py) as the first thing ``main`` does, and before it
+this module loads nothing that takes time (argparse, the commands and importlib.metadata load
+inside ``main``), so that a signal in the start-up, even a busy machine's, ends in the one line
+too: only the interpreter's own start comes before.
 """
-import argparse
 import contextlib
-import importlib
-import pkgutil
 import signal
 import sys
 import warnings
 
-from . import __version__, commands, signals
+from . import signals
 from .signals import Terminated  # noqa: F401 - where callers have always found it
 
 # Exit codes (README, "The command line").
@@ -18,19 +20,27 @@ BAD_INPUT, DIVERGED, NO_RENDERER, WRITE_FAILED = 2, 3, 4, 5
 
 
 def command_modules():
+    import importlib
+    import pkgutil
+
+    from . import commands
+
     names = sorted(info.name for info in pkgutil.iter_modules(commands.__path__)
                    if not info.name.startswith("_"))
     return [importlib.import_module(f"{commands.__name__}.{name}") for name in names]
 
 
-class OneLineParser(argparse.ArgumentParser):
-    """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
+def build_parser():
+    import argparse
 
-    def error(self, message):
-        self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+    from . import __version__
 
+    class OneLineParser(argparse.ArgumentParser):
+        """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
 
-def build_parser() -> argparse.ArgumentParser:
+        def error(self, message):
+            self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
     parser = OneLineParser(
         prog="springsim",
         description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
@@ -46,7 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    # Ctrl-C and SIGTERM are taken over first, before NumPy and Numba load (a second)
+    # Ctrl-C and SIGTERM are taken over first, before anything that takes time loads (module doc)
     with signals.handled():
         try:
             from .errors import OutputFailed, SceneError, SimulationDiverged

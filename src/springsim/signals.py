@@ -80,17 +80,30 @@ def _ignores_exceptions(frame) -> bool:
             or (code.co_name == "cb" and "importlib._bootstrap" in code.co_filename))
 
 
+def _imported_from_c(frame) -> bool:
+    """Python that an extension module's initialisation runs (an import it makes, as NumPy's
+    imports datetime): importlib calls the extension's C code through
+    ``_call_with_frames_removed``, so a Python frame right under that which is neither a
+    module's own code (``exec``) nor importlib's ``_gcd_import`` was entered from C. An
+    exception raised there comes out as the extension's ImportError ("PyCapsule_Import could
+    not import module "datetime"", with NumPy's page of advice)."""
+    back = frame.f_back
+    return (back is not None and back.f_code.co_name == "_call_with_frames_removed"
+            and "importlib._bootstrap" in back.f_code.co_filename
+            and frame.f_code.co_name not in ("<module>", "_gcd_import"))
+
+
 def _safe_to_raise(frame) -> bool | None:
     """False where the innermost code that matters was called back from code that drops an
     exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
-    (raising there hung the compile), or a string run with PyRun_String by an extension
-    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit). True
-    where it is Numba's dispatcher compiling a kernel, which passes an exception on to its
-    caller. None elsewhere: plain Python."""
+    (raising there hung the compile), a string run with PyRun_String by an extension
+    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit), or an
+    import made by an extension's initialisation. True where it is Numba's dispatcher compiling
+    a kernel, which passes an exception on to its caller. None elsewhere: plain Python."""
     for each in _frames(frame):
         module = _module(each)
         if (module == "numba.core.serialize" or module.startswith("llvmlite")
-                or _run_from_c(each) or _ignores_exceptions(each)):
+                or _run_from_c(each) or _ignores_exceptions(each) or _imported_from_c(each)):
             return False
         if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
             return True
