@@ -69,8 +69,9 @@ class Trial:
         if self.returncode == -self.signum and not self.stderr.strip():
             return True
         text = self.stderr.strip()
+        # "Traceback ...", or "Could not import runpy module" first (python -m's own imports)
         return (self.signum == signal.SIGINT and self.returncode in (1, -signal.SIGINT)
-                and text.startswith("Traceback") and text.endswith("KeyboardInterrupt")
+                and text.endswith("KeyboardInterrupt") and "Traceback" in text
                 and "/springsim/" not in text)
 
     def problems(self) -> list:

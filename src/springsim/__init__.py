@@ -6,8 +6,6 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
-import importlib
-
 TYPE_CHECKING = False   # typing's own, without importing typing (10 ms of the start-up)
 if TYPE_CHECKING:   # what the reference documents; imported at first use at run time (below)
     from .errors import SceneError, SimulationDiverged
@@ -24,7 +22,7 @@ __all__ = ["__version__", "Simulation", "Scene", "SceneError", "SimulationDiverg
 
 # Where each public name lives, imported at its first use (PEP 562): the command line starts,
 # and takes over Ctrl-C (signals.py), before NumPy and Numba load, which takes about a second,
-# and before importlib.metadata (for __version__), which takes 50 ms.
+# and before importlib.metadata (for __version__), which takes 50 ms: this module imports nothing.
 _PUBLIC = {"Simulation": "simulation", "Scene": "scene", "SceneError": "errors",
            "SimulationDiverged": "errors", "load_scene": "scenefile",
            "integrator_names": "integrators", "preset_names": "presets", "sweep": "sweeps",
@@ -47,6 +45,8 @@ def __getattr__(name):
         return value
     if name not in _PUBLIC:
         raise AttributeError(f"module 'springsim' has no attribute {name!r}")
+    import importlib
+
     value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
     globals()[name] = value
     return value

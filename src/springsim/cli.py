@@ -7,10 +7,7 @@ this module loads nothing that takes time (argparse, the commands and importlib.
 inside ``main``), so that a signal in the start-up, even a busy machine's, ends in the one line
 too: only the interpreter's own start comes before.
 """
-import contextlib
-import signal
 import sys
-import warnings
 
 from . import signals
 from .signals import Terminated  # noqa: F401 - where callers have always found it
@@ -73,28 +70,35 @@ def main(argv=None) -> int:
             terminated = isinstance(interrupt, signals.Terminated)
             print("terminated" if terminated else "interrupted", file=sys.stderr)
             _forget_unhandled_interrupt()
-            return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+            return 128 + (signals.SIGTERM if terminated else signals.SIGINT)
 
 
 def _forget_unhandled_interrupt() -> None:
     """CPython kills itself with SIGINT at exit, whatever main returns, once a KeyboardInterrupt
     has left code that C ran with PyRun_String (an extension's lazy import); signals.py keeps
     Ctrl-C out of such code, and this is the net under it: the interrupt was handled here."""
+    import contextlib
     import ctypes
 
     with contextlib.suppress(Exception):   # 3.11's flag; elsewhere it is not exported
         ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
 
 
-@contextlib.contextmanager
 def one_line_warnings(command: str):
     """Warnings as one line each, as errors are (Python's own format adds the source line)."""
+    import contextlib
+    import warnings
+
     def show(message, category, filename, lineno, file=None, line=None):
         print(f"springsim {command}: warning: {message}", file=sys.stderr)
 
-    with warnings.catch_warnings():
-        warnings.showwarning = show
-        yield
+    @contextlib.contextmanager
+    def block():
+        with warnings.catch_warnings():
+            warnings.showwarning = show
+            yield
+
+    return block()
 
 
 def quiet_overflow():

@@ -15,13 +15,19 @@ compile (minutes) stops it at once, inside ``deferred()`` too.
 SIGINT raises ``KeyboardInterrupt`` and SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so
 that every half-written file is removed on the way out (safe_files.py) and the command line
 prints one line and exits with 128 + the signal's number.
-"""
-import contextlib
-import os
-import signal
-import threading
 
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+The command line takes the signals over as the first thing it does, so this module imports
+nothing that takes time (contextlib, threading and signal's enums bring enum, functools and
+collections, 10 to 40 ms on a busy machine): it calls ``_signal``, the C module under
+``signal``, the blocks are plain classes, and threading is imported where it is used, by then
+long loaded.
+"""
+import _signal as signal   # signal.py's functions without its enums (the module doc)
+import os
+import sys
+
+SIGINT, SIGTERM = signal.SIGINT, signal.SIGTERM
+SIGNALS = (SIGINT, SIGTERM)
 RESEND_AFTER = 0.02   # s: a signal that landed in a Numba call-back outside deferred() is sent again
 
 
@@ -48,6 +54,8 @@ def on_signal(signum, frame):
         return
     if safe is False:
         # called back from C code outside deferred(): try again when it has returned
+        import threading   # loaded already: code called back from C is NumPy's or Numba's
+
         threading.Timer(RESEND_AFTER, os.kill, (os.getpid(), signum)).start()
         return
     raise exception_for(signum)
@@ -110,42 +118,58 @@ def _safe_to_raise(frame) -> bool | None:
     return None
 
 
-@contextlib.contextmanager
-def handled():
+def _in_main_thread() -> bool:
+    """Whether this is the main thread, without importing threading where it is not loaded
+    yet (then no other thread has been started from Python)."""
+    threading = sys.modules.get("threading")
+    return threading is None or threading.current_thread() is threading.main_thread()
+
+
+class handled:
     """While the block runs (a command), SIGINT and SIGTERM go to ``on_signal`` (in the main
     thread only: elsewhere Python cannot install handlers, and the caller keeps its own)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = {signum: signal.signal(signum, on_signal) for signum in SIGNALS}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
+
+    def __enter__(self):
+        self.previous = {}
+        if _in_main_thread():
+            for signum in SIGNALS:
+                try:
+                    self.previous[signum] = signal.signal(signum, on_signal)
+                except ValueError:   # a thread Python did not start (threading not loaded)
+                    break
+        return self
+
+    def __exit__(self, *raised):
+        for signum, handler in self.previous.items():
             signal.signal(signum, handler)
+        return False
 
 
-@contextlib.contextmanager
-def deferred():
+class deferred:
     """A block of compiled calls: a signal received in it is raised as it ends (module doc).
 
     Outside ``handled()`` (springsim used from Python), Python's own Ctrl-C handler is swapped
     for ``on_signal`` for the block, so Ctrl-C in a session stops a long ``advance`` cleanly too.
     """
-    global _depth, _pending
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    swapped = _depth == 0 and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    if swapped:
-        signal.signal(signal.SIGINT, on_signal)
-    _depth += 1
-    try:
-        yield
-    finally:
-        _depth -= 1
-        if swapped:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-        if _depth == 0 and _pending is not None:
-            signum, _pending = _pending, None
-            raise exception_for(signum)
+
+    def __enter__(self):
+        global _depth
+        self.main = _in_main_thread()
+        if self.main:
+            self.swapped = (_depth == 0
+                            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+            if self.swapped:
+                signal.signal(signal.SIGINT, on_signal)
+            _depth += 1
+        return self
+
+    def __exit__(self, *raised):
+        global _depth, _pending
+        if self.main:
+            _depth -= 1
+            if self.swapped:
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+            if _depth == 0 and _pending is not None:
+                signum, _pending = _pending, None
+                raise exception_for(signum)
+        return False
