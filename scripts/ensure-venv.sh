@@ -2,9 +2,10 @@
 # with its test dependencies the first time, and again whenever pyproject.toml changes; the
 # first time, it also compiles the default integrator's kernels (`springsim warmup`). Each
 # stage says what it does before it starts, and while it runs no more than SETUP_TICK seconds
-# (5) pass without a line: pip's own lines pass through, and a quiet stretch (a big download,
-# installing the packages, compiling) gets "setup: ... still ..., N s".
-SETUP_TICK=${SETUP_TICK:-5}
+# (4; the bar is a line within 5 s) pass without a line: pip's own lines pass through, and a
+# quiet stretch (a big download, installing the packages, compiling) gets
+# "setup: ... still VERB, N s".
+SETUP_TICK=${SETUP_TICK:-4}
 
 # setup_stage VERB "what it does" command...: say what it does, run the command with its output
 # (stdout and stderr) on stderr line by line, and "setup: ... still VERB, N s" after every
