@@ -147,6 +147,6 @@ def prepare(folder: Path, env=None, seconds: float = 20) -> None:
                                 "--out", "take.npz"], cwd=folder, env=env, check=True)
 
 
-def random_delays(command: str, count: int, seed: int, latest: float | None = None) -> list:
+def random_delays(command: str, count: int, seed, latest: float | None = None) -> list:
     generator = random.Random(seed)
     return [generator.uniform(EARLIEST, latest or LATEST[command]) for _ in range(count)]

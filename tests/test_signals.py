@@ -117,7 +117,7 @@ TRIALS = [(command, signum, delay)
           for command in signal_trials.LONG_COMMANDS
           for signum in (signal.SIGINT, signal.SIGTERM)
           for delay in signal_trials.random_delays(
-              command, 2 if command == "run" else 1, seed=signum,
+              command, 2 if command == "run" else 1, seed=f"{command}-{signum}",
               latest=1.5 if command == "export" else None)]   # a 4 s take exports in about 2 s
 
 
