@@ -1,18 +1,51 @@
 # Sourced by run.sh and test.sh from the repository root: creates .venv and installs springsim
 # with its test dependencies the first time, and again whenever pyproject.toml changes; the
 # first time, it also compiles the default integrator's kernels (`springsim warmup`). Each
-# stage says what it does before it starts: together they take minutes, and pip is quiet.
+# stage says what it does before it starts, and while it runs no more than SETUP_TICK seconds
+# (4; the bar is a line within 5 s) pass without a line: pip's own lines pass through, and a
+# quiet stretch (a big download, installing the packages, compiling) gets
+# "setup: ... still VERB, N s".
+SETUP_TICK=${SETUP_TICK:-4}
+
+# setup_stage VERB "what it does" command...: say what it does, run the command with its output
+# (stdout and stderr) on stderr line by line, and "setup: ... still VERB, N s" after every
+# SETUP_TICK quiet seconds.
+setup_stage() {
+  local verb=$1 what=$2 started=$SECONDS status=0
+  shift 2
+  echo "setup: $what" >&2
+  "$@" 2>&1 | setup_ticker "$verb" "$started" || status=$?
+  return "$status"
+}
+
+setup_ticker() {
+  local line="" code=0
+  while true; do
+    code=0
+    IFS= read -r -t "$SETUP_TICK" line || code=$?
+    if [ "$code" -eq 0 ]; then
+      printf '%s\n' "$line" >&2
+    elif [ "$code" -gt 128 ]; then   # read timed out: nothing for SETUP_TICK seconds
+      [ -n "$line" ] && printf '%s\n' "$line" >&2   # a part line read before the timeout
+      echo "setup: ... still $1, $((SECONDS - $2)) s" >&2
+    else                             # end of the output
+      [ -n "$line" ] && printf '%s\n' "$line" >&2
+      return 0
+    fi
+  done
+}
+
 if [ ! -x .venv/bin/springsim ] || [ ! -x .venv/bin/pytest ] || [ pyproject.toml -nt .venv/.installed ]; then
   first_time=$([ -e .venv/.installed ] && echo no || echo yes)
-  echo "setup: creating the virtual environment .venv (first run only)" >&2
-  python3 -m venv .venv
-  echo "setup: updating pip in .venv" >&2
-  .venv/bin/pip install --quiet --upgrade pip
-  echo "setup: installing springsim and its dependencies into .venv (a few minutes, first run only)" >&2
-  .venv/bin/pip install --quiet -e ".[all,test]"
+  setup_stage creating "creating the virtual environment .venv (first run only)" \
+    python3 -m venv .venv
+  setup_stage updating "updating pip in .venv" \
+    .venv/bin/pip install --progress-bar off --upgrade pip
+  setup_stage installing "installing springsim and its dependencies into .venv (a few minutes, first run only)" \
+    .venv/bin/pip install --progress-bar off -e ".[all,test]"
   touch .venv/.installed
   if [ "$first_time" = yes ]; then
-    echo "setup: compiling the default integrator's kernels (springsim warmup; about 2 minutes, first run only)" >&2
-    .venv/bin/springsim warmup --integrators rk4
+    setup_stage compiling "compiling the default integrator's kernels (springsim warmup; about 2 minutes, first run only)" \
+      .venv/bin/springsim warmup --integrators rk4
   fi
 fi

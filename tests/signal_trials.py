@@ -2,14 +2,16 @@
 must follow (README, "The command line"): one line on stderr ("interrupted" or "terminated"),
 exit code 130 or 143, no traceback, and no file left half-written.
 
-Used by tests/test_signals.py (a few trials a command) and by scripts/signal_bar.py (the
+Used by tests/test_signals.py (a few trials a command) and by benchmarks/signals.py (the
 issue's count: 50 + 50 on `run`, 10 + 10 on every other long command).
 """
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,12 +30,25 @@ LONG_COMMANDS = {
                   "--workers", "1", "--csv", "s.csv", "--png", "s.png"],
     "convergence": ["convergence", "--integrators", "rk4", "--final-time", "60",
                     "--workers", "1", "--png", "c.png"],
+    "fit": ["fit", "jelly-plane", "--set", "bodies.0.structural.ks=1500", "--observed", "take.npz", "--fit", "bodies.0.structural.ks",
+            "--max-iterations", "1000", "--out", "fit.toml", "--plot", "fit.png"],
+    "bench": ["bench", "jelly-plane", "--seconds", "600", "--json"],
+    # long on a first install: it compiles, in an empty kernel cache of its own (FRESH_CACHE)
+    "warmup": ["warmup"],
 }
-EARLIEST = 0.3   # s after starting: the interpreter has started and springsim's main has begun
+FRESH_CACHE = {"warmup"}
+# The earliest moment (s after starting the process) a signal is sent: at once. springsim's
+# handlers are its first act (cli.py); only the interpreter's own start comes before them (about
+# 30 ms on an idle machine), where no springsim code has run and no file is open: there SIGTERM
+# ends the process by its default action (a shell reports 143 and prints "Terminated") and
+# SIGINT meets Python's own handler. Trials that land there are told apart
+# (Trial.in_interpreter_start) and counted apart (benchmarks/signals.py).
+EARLIEST = 0.0
+START_WINDOW = 0.5   # s: a trial counts as landing in the interpreter's start only this early
 # The latest moment (s) a signal is sent to each, well before it could end: a signal after a
 # command's end, as the interpreter shuts down, finds Python's own handlers back.
 LATEST = {"run": 4.0, "render": 4.0, "sweep": 6.0, "export": 3.0, "stability": 4.0,
-          "convergence": 4.0}
+          "convergence": 4.0, "fit": 4.0, "bench": 4.0, "warmup": 4.0}
 
 
 @dataclass
@@ -44,6 +59,20 @@ class Trial:
     returncode: int
     stderr: str
     left: list     # files in the folder afterwards that were not there before
+
+    def in_interpreter_start(self) -> bool:
+        """Whether the signal landed before any springsim code ran (EARLIEST): the process ended
+        by the signal's default action with nothing said, or (SIGINT) in a KeyboardInterrupt
+        traceback of Python's own start-up or runpy, with no springsim frame in it."""
+        if self.delay >= START_WINDOW:
+            return False
+        if self.returncode == -self.signum and not self.stderr.strip():
+            return True
+        text = self.stderr.strip()
+        # "Traceback ...", or "Could not import runpy module" first (python -m's own imports)
+        return (self.signum == signal.SIGINT and self.returncode in (1, -signal.SIGINT)
+                and text.endswith("KeyboardInterrupt") and "Traceback" in text
+                and "/springsim/" not in text)
 
     def problems(self) -> list:
         expected = 128 + self.signum
@@ -88,6 +117,10 @@ def trial(command: str, signum: int, folder: Path, delay: float, env=None,
     """Start ``command`` (a key of LONG_COMMANDS) in ``folder``, send ``signum`` after
     ``delay`` s, and wait for it to end."""
     before = files_in(folder)
+    cache = None
+    if command in FRESH_CACHE:   # an empty kernel cache, outside the folder, removed after
+        cache = tempfile.mkdtemp(prefix="springsim-signal-cache-")
+        env = {**(env if env is not None else os.environ), "NUMBA_CACHE_DIR": cache}
     process = subprocess.Popen(
         SPRINGSIM + LONG_COMMANDS[command], cwd=folder, stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE, text=True, env=env,
@@ -101,6 +134,8 @@ def trial(command: str, signum: int, folder: Path, delay: float, env=None,
         process.kill()
         _, err = process.communicate()
         err += f"\n(still running {timeout} s after the signal)"
+    if cache is not None:
+        shutil.rmtree(cache, ignore_errors=True)
     left = sorted(folder / name for name in files_in(folder) - before)
     return Trial(command, signum, delay, process.returncode, err, [str(p) for p in left])
 
@@ -112,6 +147,6 @@ def prepare(folder: Path, env=None, seconds: float = 20) -> None:
                                 "--out", "take.npz"], cwd=folder, env=env, check=True)
 
 
-def random_delays(command: str, count: int, seed: int, latest: float | None = None) -> list:
+def random_delays(command: str, count: int, seed, latest: float | None = None) -> list:
     generator = random.Random(seed)
     return [generator.uniform(EARLIEST, latest or LATEST[command]) for _ in range(count)]

@@ -178,26 +178,42 @@ def test_counts_of_one_are_singular():
     assert (plural(1, "scene"), plural(2, "scene")) == ("1 scene", "2 scenes")
 
 
-def test_a_printed_built_in_scene_explains_its_installed_mesh_path_and_both_ways_work(
+def test_a_printed_built_in_scene_names_its_meshes_portably_and_runs_from_another_folder(
         tmp_path, capsys, monkeypatch):
-    """Issue 28, item 8: `springsim scenes jelly-torus > my.toml` names the installed mesh by
-    its absolute path and says so, with the way to keep the mesh beside the scene; both files
-    load from another folder, the second with the copy."""
+    """Issue 28, item 8: `springsim scenes jelly-torus > my.toml` wrote this installation's
+    absolute path to its meshes. It writes ``builtin:NAME``, which the reader finds wherever
+    springsim is installed: the file runs from another folder, and a mesh copied beside it
+    works too."""
     import shutil
-    from pathlib import Path
 
+    from springsim.presets import MESHES
     from springsim.scenefile import load_scene
 
     assert main(["scenes", "jelly-torus"]) == 0
     text = capsys.readouterr().out
-    (tmp_path / "my.toml").write_text(text)
-    monkeypatch.chdir(Path("/"))
-    installed = load_scene(str(tmp_path / "my.toml")).bodies[0].file
-    assert Path(installed).is_absolute() and Path(installed).is_file()
-    lines = text.splitlines()
-    at = lines.index(f'file = "{installed}"')
-    assert "installed with springsim" in lines[at - 3] and 'file = "torus.obj"' in lines[at - 2]
-    shutil.copy(installed, tmp_path / "torus.obj")
-    lines[at] = 'file = "torus.obj"'
-    (tmp_path / "mine.toml").write_text("\n".join(lines))
-    assert load_scene(str(tmp_path / "mine.toml")).bodies[0].file == str(tmp_path / "torus.obj")
+    assert str(MESHES) not in text and str(MESHES.parent) not in text
+    files = [line for line in text.splitlines() if line.startswith("file = ")]
+    assert files == ['file = "builtin:torus.obj"', 'file = "builtin:stairs.obj"']
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "scenes" / "my.toml").write_text(text)
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    scene = load_scene("../scenes/my.toml")
+    assert (scene.bodies[0].file, scene.terrains[0].file) == (str(MESHES / "torus.obj"),
+                                                               str(MESHES / "stairs.obj"))
+    assert main(["run", "../scenes/my.toml", "--duration", "0.01", "--fps", "100", "--quiet",
+                 "--out", "my.npz"]) == 0
+    with np.load("my.npz") as take:
+        assert take["positions"].shape[0] == 2 and np.all(np.isfinite(take["positions"]))
+    # a mesh of one's own, beside the scene file, as the comment above the line says
+    shutil.copy(MESHES / "torus.obj", tmp_path / "scenes" / "torus.obj")
+    (tmp_path / "scenes" / "mine.toml").write_text(
+        text.replace('"builtin:torus.obj"', '"torus.obj"'))
+    assert load_scene("../scenes/mine.toml").bodies[0].file == "../scenes/torus.obj"
+
+
+def test_a_builtin_mesh_that_is_not_installed_is_one_line(capsys):
+    assert main(["scenes", "jelly-torus", "--set", "bodies.0.file=builtin:teapot.obj"]) == 2
+    assert capsys.readouterr().err == (
+        "springsim scenes: bodies.0.file = 'builtin:teapot.obj': is not a mesh installed with "
+        "springsim; those are builtin:stairs.obj, builtin:torus.obj\n")

@@ -3,7 +3,8 @@
 Oracles: with no mark in the cache folder, a run prints the notice on stderr before its first
 step and marks the integrator after it; with the mark, nothing; a terminal gets a spinner, a log
 none; `springsim warmup` compiles and marks each integrator asked for; scripts/ensure-venv.sh
-says what each stage does before it starts it (a fake python3 and pip record when they run).
+says what each stage does before it starts it (a fake python3 and pip record when they run),
+and that it still runs after every quiet SETUP_TICK seconds.
 """
 import io
 import os
@@ -101,6 +102,8 @@ def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
           done
         fi
         """)
+    # the install says nothing for 2.5 s (as pip installing numba and scipy for a minute)
+    python += 'case "$*" in *" -e "*) sleep 2.5;; esac\n'
     (fake / "python3").write_text(python)
     (fake / "python3").chmod(stat.S_IRWXU)
     repo = tmp_path / "clone"
@@ -108,8 +111,15 @@ def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
     (repo / "pyproject.toml").write_text("")
     script = (ROOT / "scripts" / "ensure-venv.sh").read_text()
     subprocess.run(["bash", "-c", f"source /dev/stdin 2>>{log}"], input=script, text=True,
-                   cwd=repo, check=True, env={**os.environ, "PATH": f"{fake}:{os.environ['PATH']}"})
+                   cwd=repo, check=True, env={**os.environ, "PATH": f"{fake}:{os.environ['PATH']}",
+                                              "SETUP_TICK": "1"})
     lines = log.read_text().splitlines()
+    # no quiet stretch longer than SETUP_TICK: the silent install is said to go on each second
+    install = next(i for i, line in enumerate(lines) if line.startswith("RAN pip install")
+                   and " -e " in line)
+    assert lines[install + 1:install + 3] == ["setup: ... still installing, 1 s",
+                                              "setup: ... still installing, 2 s"], lines
+    lines = [line for line in lines if not line.startswith("setup: ... still ")]
     assert [line.split()[1] for line in lines if line.startswith("RAN")] == [
         "python3", "pip", "pip", "springsim"]
     for index, line in enumerate(lines):

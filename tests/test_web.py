@@ -70,9 +70,11 @@ def chromium() -> str:
     return found
 
 
-def test_a_headless_browser_shows_the_body(take_path, tmp_path):
-    browser, port = chromium(), free_port()
-    server = subprocess.Popen([sys.executable, "-m", "springsim", "play", str(take_path), "--web",
+@contextlib.contextmanager
+def served_replay(path):
+    """`springsim play TAKE --web` running, paused; yields its URL once it listens."""
+    port = free_port()
+    server = subprocess.Popen([sys.executable, "-m", "springsim", "play", str(path), "--web",
                                "--port", str(port), "--paused", "--seconds", "300"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -85,11 +87,17 @@ def test_a_headless_browser_shows_the_body(take_path, tmp_path):
             except OSError:
                 assert time.monotonic() < deadline, "the server did not start"
                 time.sleep(0.2)
-        picture = browser_shot_once(browser, f"http://127.0.0.1:{port}", tmp_path,
-                                    lambda shown: orange_pixels(shown).mean() > 0.01)
+        yield f"http://127.0.0.1:{port}"
     finally:
         server.terminate()
         server.wait(timeout=30)
+
+
+def test_a_headless_browser_shows_the_body(take_path, tmp_path):
+    browser = chromium()
+    with served_replay(take_path) as url:
+        picture = browser_shot_once(browser, url, tmp_path,
+                                    lambda shown: orange_pixels(shown).mean() > 0.01)
     assert picture.shape == (600, 960, 3)
     orange = orange_pixels(picture)
     rows, columns = np.nonzero(orange)
@@ -106,6 +114,21 @@ def browser_shot_once(browser, url, folder, shows, seconds=150):
     loaded machine, never return (a CI run hung 120 s). Here the test looks every half second
     until the picture shows what it waits for, or gives the last picture after `seconds`.
     """
+    deadline = time.monotonic() + seconds
+    with browser_page(browser, url, folder, deadline) as (call, check_alive):
+        while True:
+            check_alive()
+            png = base64.b64decode(call("Page.captureScreenshot", format="png")["data"])
+            picture = iio.imread(png)[..., :3].astype(int)
+            if shows(picture) or time.monotonic() > deadline:
+                return picture
+            time.sleep(0.5)
+
+
+@contextlib.contextmanager
+def browser_page(browser, url, folder, deadline):
+    """(call, check_alive) for `url` open in headless chromium at 960 x 600: `call(method,
+    **params)` over the page's DevTools websocket; chromium and its children end after."""
     profile, log_path = folder / "profile", folder / "chromium.log"
     with open(log_path, "wb") as log:
         # Port 0: chromium picks a free port itself and names it in the profile (no race with a
@@ -123,19 +146,12 @@ def browser_shot_once(browser, url, folder, shows, seconds=150):
         assert process.poll() is None, (f"chromium exited with code {process.returncode}:\n"
                                         + log_path.read_text(errors="replace")[-3000:])
 
-    deadline = time.monotonic() + seconds
     try:
         with devtools_page(devtools_port(profile, deadline, check_alive), deadline,
                            check_alive) as call:
             call("Emulation.setDeviceMetricsOverride", width=960, height=600,
                  deviceScaleFactor=1, mobile=False)
-            while True:
-                check_alive()
-                png = base64.b64decode(call("Page.captureScreenshot", format="png")["data"])
-                picture = iio.imread(png)[..., :3].astype(int)
-                if shows(picture) or time.monotonic() > deadline:
-                    return picture
-                time.sleep(0.5)
+            yield call, check_alive
     finally:
         end_process_group(process)
 
@@ -199,6 +215,83 @@ def orange_pixels(picture):
     """Where the cube's lit faces are: orange pixels."""
     r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
     return (r > 150) & (r - b > 60) & (g > b)
+
+
+# Run in the page before its own scripts: every text drawn on a canvas of a uPlot chart, with
+# where it starts and ends on that canvas (its transform, alignment and measured width applied).
+RECORD_CHART_TEXT = """
+window.__chartTexts = [];
+const fillText = CanvasRenderingContext2D.prototype.fillText;
+CanvasRenderingContext2D.prototype.fillText = function (text, x, y, maxWidth) {
+  if (this.canvas.closest && this.canvas.closest(".uplot")) {
+    const t = this.getTransform(), width = this.measureText(String(text)).width;
+    const align = this.textAlign;
+    const shift = (align === "right" || align === "end") ? -width
+                : align === "center" ? -width / 2 : 0;
+    window.__chartTexts.push({text: String(text), align: align,
+      rotated: t.b !== 0 || t.c !== 0, left: t.a * (x + shift) + t.e,
+      right: t.a * (x + shift + width) + t.e, canvasWidth: this.canvas.width});
+  }
+  return fillText.apply(this, arguments);
+};
+"""
+
+
+def chart_number(text: str) -> float:
+    """A tick label as uPlot writes a number ("20,000", "−5", "0.25"); ValueError for a date
+    or a time of day ("1/1/70", "12:00am", ":05")."""
+    return float(text.replace(",", "").replace("\u2212", "-"))
+
+
+def test_the_energy_chart_in_chromium_counts_seconds_with_whole_labels(take_path, tmp_path):
+    """Issue 28, item 7, as a browser draws it: uPlot read the time series as dates (the time
+    axis said "1/1/70 12:00am", ":00", ":05") and cut the energy labels at the canvas's left
+    edge ("0,000" for 20,000). Every label chromium draws on the chart is read back: the time
+    ticks are seconds within the take, the energy ticks are numbers within reach of the
+    recorded energies, and each starts and ends inside its canvas."""
+    from springsim.replay.window import recorded_energies
+
+    take = load_take(take_path)
+    energies = np.concatenate(list(recorded_energies(take.arrays).values()))
+    browser = chromium()
+    with served_replay(take_path) as url:
+        deadline = time.monotonic() + 150
+        with browser_page(browser, url, tmp_path, deadline) as (call, check_alive):
+            call("Page.enable")   # without it the script is not run in the reloaded page
+            call("Page.addScriptToEvaluateOnNewDocument", source=RECORD_CHART_TEXT)
+            call("Page.reload")
+            while True:
+                check_alive()
+                drawn = json.loads(call("Runtime.evaluate",
+                                        expression="JSON.stringify(window.__chartTexts || [])",
+                                        returnByValue=True)["result"]["value"])
+                aligns = {item["align"] for item in drawn}
+                if {"center", "right"} <= aligns and len(drawn) >= 6:   # both axes drawn
+                    time.sleep(1)   # let the chart finish its first draws
+                    drawn = json.loads(call(
+                        "Runtime.evaluate", expression="JSON.stringify(window.__chartTexts)",
+                        returnByValue=True)["result"]["value"])
+                    break
+                assert time.monotonic() < deadline, f"the chart drew no axes: {drawn}"
+                time.sleep(0.5)
+    ticks = [item for item in drawn if item["text"] not in ("t (s)", "J")]
+    for item in ticks:   # dates and times of day do not read as numbers
+        assert not item["rotated"], item
+        try:
+            chart_number(item["text"])
+        except ValueError:
+            raise AssertionError(f"a tick that is not a number: {item['text']!r}") from None
+    assert {"t (s)", "J"} <= {item["text"] for item in drawn}   # the axes' names
+    seconds = sorted({chart_number(item["text"]) for item in ticks if item["align"] == "center"})
+    joules = sorted({chart_number(item["text"]) for item in ticks if item["align"] != "center"})
+    assert len(seconds) >= 3 and seconds[0] >= 0 and seconds[-1] <= take.time[-1] + 1e-9
+    span = energies.max() - energies.min()
+    assert len(joules) >= 3
+    assert energies.min() - span <= joules[0] and joules[-1] <= energies.max() + span
+    assert max(abs(value) for value in joules) >= 1000   # labels long enough to be cut before
+    for item in drawn:   # whole: no label starts left of its canvas or ends right of it
+        if not item["rotated"]:   # (the "J" beside the axis is turned a quarter)
+            assert -0.5 <= item["left"] and item["right"] <= item["canvasWidth"] + 0.5, item
 
 
 def test_the_energy_chart_counts_seconds_and_has_room_for_its_labels(take_path):

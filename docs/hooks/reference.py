@@ -105,7 +105,7 @@ NOTES = {
                                 "`edge+x`, `edge-x`, or a list of particle numbers"),
     "bodies/cloth/file": ("", "a triangle or quad mesh (OBJ, STL, PLY, OFF, GLB, GLTF) to be "
                               "the cloth instead of the grid; relative to the scene file's "
-                              "folder"),
+                              "folder; `builtin:NAME` is a mesh installed with springsim"),
     "bodies/cloth/scale": ("", "factor on the file's coordinates"),
     "bodies/cloth/material": ("", "a material per area instead of `particle_mass` and per-kind "
                                   "`ks`, `kd`: the same cloth at any resolution"),
@@ -142,7 +142,8 @@ NOTES = {
     "bodies/balls/particle_friction": ("", "Coulomb friction between a ball and a particle"),
     "bodies/balls/position_correction": ("", "share of a penetration removed each step"),
     "*/mesh/file": ("", "the mesh (OBJ, STL, PLY, OFF, GLB, GLTF); relative to the scene file's "
-                        "folder"),
+                        "folder; `builtin:NAME` is a mesh installed with springsim "
+                        "(`builtin:torus.obj`, `builtin:stairs.obj`)"),
     "bodies/mesh/spacing": ("m", 'distance between lattice particles, or "auto": the spacing '
                                  "(three significant digits) for about `particles` particles"),
     "bodies/mesh/particles": ("", 'the particle budget of spacing = "auto"'),

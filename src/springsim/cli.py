@@ -1,16 +1,15 @@
 """The `springsim` command line. Each subcommand is one module in ``springsim.commands`` that
 defines ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``; a new command is a
 new file there. Modules import their heavy dependencies inside ``run`` so that start-up stays fast.
-"""
-import argparse
-import contextlib
-import importlib
-import pkgutil
-import signal
-import sys
-import warnings
 
-from . import __version__, commands, signals
+Ctrl-C and SIGTERM are taken over (signals.py) as the first thing ``main`` does, and before it
+this module loads nothing that takes time (argparse, the commands and importlib.metadata load
+inside ``main``), so that a signal in the start-up, even a busy machine's, ends in the one line
+too: only the interpreter's own start comes before.
+"""
+import sys
+
+from . import signals
 from .signals import Terminated  # noqa: F401 - where callers have always found it
 
 # Exit codes (README, "The command line").
@@ -18,19 +17,27 @@ BAD_INPUT, DIVERGED, NO_RENDERER, WRITE_FAILED = 2, 3, 4, 5
 
 
 def command_modules():
+    import importlib
+    import pkgutil
+
+    from . import commands
+
     names = sorted(info.name for info in pkgutil.iter_modules(commands.__path__)
                    if not info.name.startswith("_"))
     return [importlib.import_module(f"{commands.__name__}.{name}") for name in names]
 
 
-class OneLineParser(argparse.ArgumentParser):
-    """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
+def build_parser():
+    import argparse
 
-    def error(self, message):
-        self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+    from . import __version__
 
+    class OneLineParser(argparse.ArgumentParser):
+        """Usage errors as one line too (exit 2), pointing at --help instead of printing usage."""
 
-def build_parser() -> argparse.ArgumentParser:
+        def error(self, message):
+            self.exit(BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
     parser = OneLineParser(
         prog="springsim",
         description="Mass-spring physics: jelly cubes, cloth and balls on terrains, with a choice "
@@ -46,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    # Ctrl-C and SIGTERM are taken over first, before NumPy and Numba load (a second)
+    # Ctrl-C and SIGTERM are taken over first, before anything that takes time loads (module doc)
     with signals.handled():
         try:
             from .errors import OutputFailed, SceneError, SimulationDiverged
@@ -63,28 +70,35 @@ def main(argv=None) -> int:
             terminated = isinstance(interrupt, signals.Terminated)
             print("terminated" if terminated else "interrupted", file=sys.stderr)
             _forget_unhandled_interrupt()
-            return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+            return 128 + (signals.SIGTERM if terminated else signals.SIGINT)
 
 
 def _forget_unhandled_interrupt() -> None:
     """CPython kills itself with SIGINT at exit, whatever main returns, once a KeyboardInterrupt
     has left code that C ran with PyRun_String (an extension's lazy import); signals.py keeps
     Ctrl-C out of such code, and this is the net under it: the interrupt was handled here."""
+    import contextlib
     import ctypes
 
     with contextlib.suppress(Exception):   # 3.11's flag; elsewhere it is not exported
         ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
 
 
-@contextlib.contextmanager
 def one_line_warnings(command: str):
     """Warnings as one line each, as errors are (Python's own format adds the source line)."""
+    import contextlib
+    import warnings
+
     def show(message, category, filename, lineno, file=None, line=None):
         print(f"springsim {command}: warning: {message}", file=sys.stderr)
 
-    with warnings.catch_warnings():
-        warnings.showwarning = show
-        yield
+    @contextlib.contextmanager
+    def block():
+        with warnings.catch_warnings():
+            warnings.showwarning = show
+            yield
+
+    return block()
 
 
 def quiet_overflow():

@@ -45,7 +45,7 @@ import numpy as np
 
 from .errors import SceneError, require
 from .file_kinds import is_recording_file
-from .presets import PRESETS, preset
+from .presets import MESHES, PRESETS, preset
 from .scene import Scene
 from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
                            describe, init_fields, merge_table, typed_item, is_integer,
@@ -54,6 +54,9 @@ from .terrains import TERRAIN_TYPES  # noqa: F401  (the registries, as the reade
 
 
 MAX_SCENE_BYTES = 16 * 2 ** 20   # a scene file is a few kB; 16 MB leaves room for mesh tables
+# ``file = "builtin:torus.obj"``: a mesh installed with springsim (presets.MESHES), found
+# wherever springsim is installed, so a printed built-in scene runs from any folder
+BUILTIN_MESH = "builtin:"
 
 
 def load_scene(name_or_path, overrides=()) -> Scene:
@@ -70,6 +73,7 @@ def load_scene(name_or_path, overrides=()) -> Scene:
     for override in overrides:
         scene = apply_override(scene, override)
         names_step |= str(override).partition("=")[0].strip() == "dt"
+    scene = builtin_meshes_found(scene)   # an override may name one too
     scene.validate()
     if not names_step:
         scene = with_automatic_step(scene)
@@ -167,7 +171,43 @@ def _file_kind(mode: int) -> str:
 
 def scene_from_table(table: dict) -> Scene:
     """A Scene from a parsed TOML document; every key and value is checked."""
-    return merge_table(Scene(), table, "")
+    return builtin_meshes_found(merge_table(Scene(), table, ""))
+
+
+def _mesh_files(scene: Scene):
+    """(key, item) for every body and terrain that has a ``file``."""
+    for list_name in ("bodies", "terrains"):
+        for index, item in enumerate(getattr(scene, list_name)):
+            if isinstance(getattr(item, "file", None), str):
+                yield f"{list_name}.{index}.file", item
+
+
+def builtin_meshes_found(scene: Scene) -> Scene:
+    """The scene with each ``builtin:NAME`` file replaced by that installed mesh's path."""
+    for key, item in _mesh_files(scene):
+        if item.file.startswith(BUILTIN_MESH):
+            name = item.file[len(BUILTIN_MESH):]
+            installed = sorted(path.name for path in MESHES.iterdir() if path.is_file())
+            require(name in installed, key, item.file,
+                    "is not a mesh installed with springsim; those are "
+                    + ", ".join(BUILTIN_MESH + each for each in installed))
+            item.file = str(MESHES / name)
+    return scene
+
+
+def with_builtin_mesh_names(scene: Scene) -> Scene:
+    """A copy of the scene whose files that are meshes installed with springsim are written
+    ``builtin:NAME`` (which the reader finds wherever springsim is installed), not by this
+    installation's path: what `springsim scenes` prints runs from any folder."""
+    import copy
+
+    scene = copy.deepcopy(scene)
+    for _, item in _mesh_files(scene):
+        if item.file and not item.file.startswith(BUILTIN_MESH):
+            path = Path(item.file).expanduser().resolve()
+            if path.parent == MESHES and path.is_file():
+                item.file = BUILTIN_MESH + path.name
+    return scene
 
 
 def apply_override(scene: Scene, override: str) -> Scene:
@@ -259,13 +299,15 @@ def _list_index(items, text: str, list_key: str, full_key: str, value) -> int:
 def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
     """The scene as a TOML scene file that ``load_scene`` reads back to the same scene.
 
-    ``only_changes`` leaves out every key that has its default value (the name is always kept).
+    ``only_changes`` leaves out every key that has its default value, but for the name and the
+    step: a file that gives no dt gets one chosen from its springs (step_size.py), so the step
+    the scene ran with is always written.
     """
     defaults = Scene() if only_changes else None
     lines = [f"{name} = {toml_value(getattr(scene, name))}"
              for name in init_fields(Scene) if name not in TYPED_LISTS
              and getattr(scene, name) is not None   # unset (no wind): TOML has no null
-             and (name == "name" or not _is_default(scene, defaults, name))]
+             and (name in ("name", "dt") or not _is_default(scene, defaults, name))]
     for list_name, (_, registry) in TYPED_LISTS.items():
         for item in getattr(scene, list_name):
             kind = type_name(item, registry)

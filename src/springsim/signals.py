@@ -15,13 +15,19 @@ compile (minutes) stops it at once, inside ``deferred()`` too.
 SIGINT raises ``KeyboardInterrupt`` and SIGTERM raises ``Terminated`` (a KeyboardInterrupt), so
 that every half-written file is removed on the way out (safe_files.py) and the command line
 prints one line and exits with 128 + the signal's number.
-"""
-import contextlib
-import os
-import signal
-import threading
 
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+The command line takes the signals over as the first thing it does, so this module imports
+nothing that takes time (contextlib, threading and signal's enums bring enum, functools and
+collections, 10 to 40 ms on a busy machine): it calls ``_signal``, the C module under
+``signal``, the blocks are plain classes, and threading is imported where it is used, by then
+long loaded.
+"""
+import _signal as signal   # signal.py's functions without its enums (the module doc)
+import os
+import sys
+
+SIGINT, SIGTERM = signal.SIGINT, signal.SIGTERM
+SIGNALS = (SIGINT, SIGTERM)
 RESEND_AFTER = 0.02   # s: a signal that landed in a Numba call-back outside deferred() is sent again
 
 
@@ -48,6 +54,8 @@ def on_signal(signum, frame):
         return
     if safe is False:
         # called back from C code outside deferred(): try again when it has returned
+        import threading   # loaded already: code called back from C is NumPy's or Numba's
+
         threading.Timer(RESEND_AFTER, os.kill, (os.getpid(), signum)).start()
         return
     raise exception_for(signum)
@@ -80,59 +88,88 @@ def _ignores_exceptions(frame) -> bool:
             or (code.co_name == "cb" and "importlib._bootstrap" in code.co_filename))
 
 
+def _imported_from_c(frame) -> bool:
+    """Python that an extension module's initialisation runs (an import it makes, as NumPy's
+    imports datetime): importlib calls the extension's C code through
+    ``_call_with_frames_removed``, so a Python frame right under that which is neither a
+    module's own code (``exec``) nor importlib's ``_gcd_import`` was entered from C. An
+    exception raised there comes out as the extension's ImportError ("PyCapsule_Import could
+    not import module "datetime"", with NumPy's page of advice)."""
+    back = frame.f_back
+    return (back is not None and back.f_code.co_name == "_call_with_frames_removed"
+            and "importlib._bootstrap" in back.f_code.co_filename
+            and frame.f_code.co_name not in ("<module>", "_gcd_import"))
+
+
 def _safe_to_raise(frame) -> bool | None:
     """False where the innermost code that matters was called back from code that drops an
     exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
-    (raising there hung the compile), or a string run with PyRun_String by an extension
-    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit). True
-    where it is Numba's dispatcher compiling a kernel, which passes an exception on to its
-    caller. None elsewhere: plain Python."""
+    (raising there hung the compile), a string run with PyRun_String by an extension
+    (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit), or an
+    import made by an extension's initialisation. True where it is Numba's dispatcher compiling
+    a kernel, which passes an exception on to its caller. None elsewhere: plain Python."""
     for each in _frames(frame):
         module = _module(each)
         if (module == "numba.core.serialize" or module.startswith("llvmlite")
-                or _run_from_c(each) or _ignores_exceptions(each)):
+                or _run_from_c(each) or _ignores_exceptions(each) or _imported_from_c(each)):
             return False
         if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
             return True
     return None
 
 
-@contextlib.contextmanager
-def handled():
+def _in_main_thread() -> bool:
+    """Whether this is the main thread, without importing threading where it is not loaded
+    yet (then no other thread has been started from Python)."""
+    threading = sys.modules.get("threading")
+    return threading is None or threading.current_thread() is threading.main_thread()
+
+
+class handled:
     """While the block runs (a command), SIGINT and SIGTERM go to ``on_signal`` (in the main
     thread only: elsewhere Python cannot install handlers, and the caller keeps its own)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = {signum: signal.signal(signum, on_signal) for signum in SIGNALS}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
+
+    def __enter__(self):
+        self.previous = {}
+        if _in_main_thread():
+            for signum in SIGNALS:
+                try:
+                    self.previous[signum] = signal.signal(signum, on_signal)
+                except ValueError:   # a thread Python did not start (threading not loaded)
+                    break
+        return self
+
+    def __exit__(self, *raised):
+        for signum, handler in self.previous.items():
             signal.signal(signum, handler)
+        return False
 
 
-@contextlib.contextmanager
-def deferred():
+class deferred:
     """A block of compiled calls: a signal received in it is raised as it ends (module doc).
 
     Outside ``handled()`` (springsim used from Python), Python's own Ctrl-C handler is swapped
     for ``on_signal`` for the block, so Ctrl-C in a session stops a long ``advance`` cleanly too.
     """
-    global _depth, _pending
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    swapped = _depth == 0 and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    if swapped:
-        signal.signal(signal.SIGINT, on_signal)
-    _depth += 1
-    try:
-        yield
-    finally:
-        _depth -= 1
-        if swapped:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-        if _depth == 0 and _pending is not None:
-            signum, _pending = _pending, None
-            raise exception_for(signum)
+
+    def __enter__(self):
+        global _depth
+        self.main = _in_main_thread()
+        if self.main:
+            self.swapped = (_depth == 0
+                            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+            if self.swapped:
+                signal.signal(signal.SIGINT, on_signal)
+            _depth += 1
+        return self
+
+    def __exit__(self, *raised):
+        global _depth, _pending
+        if self.main:
+            _depth -= 1
+            if self.swapped:
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+            if _depth == 0 and _pending is not None:
+                signum, _pending = _pending, None
+                raise exception_for(signum)
+        return False

@@ -11,13 +11,14 @@ def add_arguments(parser) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change one key of the printed scene (repeatable)")
     parser.add_argument("--short", action="store_true",
-                        help="print only the keys that differ from their defaults")
+                        help="print only the keys that differ from their defaults, and dt (a file "
+                             "without dt gets one chosen from its springs)")
 
 
 def run(args) -> int:
     from ..errors import require
     from ..presets import PRESETS
-    from ..scenefile import load_scene, scene_to_toml
+    from ..scenefile import load_scene, scene_to_toml, with_builtin_mesh_names
 
     if args.scene is None:
         require(not args.set, "--set", args.set[0] if args.set else None,
@@ -26,25 +27,21 @@ def run(args) -> int:
         for name, (_, description) in PRESETS.items():
             print(f"{name:<{width}}  {description}")
         return 0
-    text = scene_to_toml(load_scene(args.scene, args.set), only_changes=args.short)
-    print(explain_package_files(text), end="")
+    scene = with_builtin_mesh_names(load_scene(args.scene, args.set))
+    print(explain_builtin_meshes(scene_to_toml(scene, only_changes=args.short)), end="")
     return 0
 
 
-def explain_package_files(text: str) -> str:
-    """A ``file = "..."`` line naming a mesh installed with springsim gets a comment above it:
-    the path is this installation's (it works from any folder while springsim stays installed
-    there), and how to keep the mesh with the scene instead."""
-    from pathlib import Path
+def explain_builtin_meshes(text: str) -> str:
+    """A ``file = "builtin:NAME"`` line gets a comment above it: what it is, and how to use a
+    mesh of one's own instead."""
+    from ..scenefile import BUILTIN_MESH
 
-    package = str(Path(__file__).resolve().parents[1])
     lines = []
     for line in text.splitlines(keepends=True):
-        if line.startswith("file = ") and package in line:
-            name = Path(line.split("=", 1)[1].strip().strip('"')).name
-            lines.append(f"# {name} is installed with springsim: this absolute path works from "
-                         "any folder while springsim\n# stays installed here. To keep the mesh "
-                         f"with this scene, copy it beside this file and write file = \"{name}\""
-                         "\n# (a relative path is read from the scene file's folder).\n")
+        if line.startswith(f'file = "{BUILTIN_MESH}'):
+            lines.append("# builtin:NAME is a mesh installed with springsim, found from any "
+                         "folder; a path of your\n# own is read from this file's folder "
+                         "(file = \"my_mesh.obj\" beside it)\n")
         lines.append(line)
     return "".join(lines)
