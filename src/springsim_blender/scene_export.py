@@ -388,11 +388,28 @@ def body_table(obj, mesh_file) -> dict:
 
 def collider_table(obj, mesh_file, data, times, fps, folder, name) -> dict:
     settings = obj.springsim
+    shared = overshared_edges(data.faces)
+    if shared:
+        raise SetupError(
+            f"collider {obj.name!r} is not manifold: {shared} edge(s) are shared by more than "
+            "two faces, so it has no inside and outside to keep bodies out of (Edit Mode: "
+            "Select > Select All by Trait > Non Manifold)")
     terrain = {"type": "mesh", "file": mesh_file, "friction": setting(settings.friction),
                "restitution": setting(settings.restitution),
                "resolution": int(settings.resolution)}
     terrain.update(path_table(data, times, fps, folder, name))
     return terrain
+
+
+def overshared_edges(faces) -> int:
+    """How many edges more than two faces share (an open mesh's boundary is allowed: springsim
+    collides with it on the side its normals face)."""
+    counts = {}
+    for face in faces:
+        for a, b in zip(face, face[1:] + face[:1]):
+            edge = (a, b) if a < b else (b, a)
+            counts[edge] = counts.get(edge, 0) + 1
+    return sum(1 for count in counts.values() if count > 2)
 
 
 def wind_table(scene, settings) -> dict | None:
