@@ -72,23 +72,23 @@ def simulate() -> str:
     try:
         bpy.ops.springsim.simulate()
     except RuntimeError as error:
-        return str(error)
+        return str(error).strip()
     return ""
 
 
 def sphere_through(folder: Path) -> dict:
-    """A 20 x 20 grid pinned along one edge; a sphere keyframed down through it. Then the take
-    is saved, the file reopened (still plays), exported, and freed."""
+    """A 20 x 20 grid hanging from its top edge; a sphere keyframed through it. Then the take is
+    saved, the file reopened (it still plays), the scene exported, and the take freed."""
     frames = 24
     scene = fresh(folder, frames)
-    cloth, pinned = grid_cloth()
+    cloth, pinned = grid_cloth(rotation=(math.radians(90), 0, 0))
     bpy.ops.mesh.primitive_uv_sphere_add(radius=0.2, segments=32, ring_count=16,
-                                         location=(0, 0, 1.5))
+                                         location=(0.05, -0.5, 0.95))
     sphere = bpy.context.object
     sphere.name = "Ball"
     sphere.springsim.role = "COLLIDER"
     sphere.keyframe_insert("location", frame=1)
-    sphere.location = (0, -0.1, 0.4)
+    sphere.location = (0.05, 0.6, 0.95)
     sphere.keyframe_insert("location", frame=frames)
     error = simulate()
     result = {"error": error, "pinned": pinned, "frames": list(range(1, frames + 1))}
