@@ -198,6 +198,34 @@ def failures(folder: Path) -> dict:
     return result
 
 
+def streaming(folder: Path) -> dict:
+    """The interface's path without the interface: frames reach the object's cache while the
+    run goes on, and a cancelled run keeps the frames computed (the modal operator's timer calls
+    update(), Esc calls cancel())."""
+    import time
+
+    from springsim_blender.operators import start_run
+
+    scene = fresh(folder, 48)
+    scene.springsim.substeps = 40               # slow enough to be seen frame by frame
+    grid_cloth()
+    seen = []
+    run = start_run(bpy.context)
+    while run.running:
+        run.update()
+        seen.append(run.shown)
+        time.sleep(0.05)
+    run.finish()
+    whole = run.shown
+    run = start_run(bpy.context)
+    while run.running and run.update() == 0 or run.shown < 5:
+        time.sleep(0.02)
+    run.cancel()
+    cache = run.caches["Cloth"]
+    kept = int(np.fromfile(cache, "<i4", count=8)[7])
+    return {"seen": seen, "whole": whole, "cancelled_at": run.shown, "kept": kept}
+
+
 if __name__ == "__main__":
     scenario, folder = sys.argv[1], Path(sys.argv[2])
     print(json.dumps(globals()[scenario](folder)), flush=True)

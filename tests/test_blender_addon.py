@@ -139,6 +139,15 @@ def test_a_jelly_body_from_a_uv_mapped_mesh_lands_on_a_plane_collider(tmp_path):
     assert -0.02 < last[:, 2].min() < 0.1
 
 
+def test_frames_reach_blender_while_the_run_goes_on_and_cancel_keeps_them(tmp_path):
+    result = in_blender("streaming", tmp_path)
+    assert result["whole"] == 48
+    partial = [count for count in result["seen"] if 0 < count < 48]
+    assert len(set(partial)) >= 2                        # several partial takes were shown
+    assert result["seen"] == sorted(result["seen"])
+    assert 5 <= result["kept"] == result["cancelled_at"] < 48
+
+
 def test_failures_are_one_line_reports_and_blender_keeps_running(tmp_path):
     bare = tmp_path / "bare-python"
     bare.write_text(f'#!/bin/sh\nexec "{sys.executable}" -I -S "$@"\n')
