@@ -136,6 +136,7 @@ class Run:
                                 f"simulated objects {self.exported.point_count} vertices")
             self._write(frames, first=0, append=False)
             self.shown = len(frames)
+            self.stream.unlink(missing_ok=True)      # the take says it all now
             return
         self.update()
         raise RunFailed(self.failure(code))
