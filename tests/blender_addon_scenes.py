@@ -198,6 +198,21 @@ def failures(folder: Path) -> dict:
     return result
 
 
+def soft_pins(folder: Path) -> dict:
+    """A flat grid held by its +y edge at weight 1 and its -y edge at weight 0.5."""
+    frames = 24
+    fresh(folder, frames)
+    cloth, hard = grid_cloth()
+    cloth.springsim.pin_stiffness = 200.0
+    low = min(v.co.y for v in cloth.data.vertices)
+    soft = [v.index for v in cloth.data.vertices if v.co.y < low + 1e-6]
+    cloth.vertex_groups["pin"].add(soft, 0.5, "REPLACE")
+    error = simulate()
+    bpy.ops.springsim.export_scene(filepath=str(folder / "exported"))
+    return {"error": error, "hard": hard, "soft": soft,
+            "rest": world_vertices(cloth, 1, cache=False), "last": world_vertices(cloth, frames)}
+
+
 def streaming(folder: Path) -> dict:
     """The interface's path without the interface: frames reach the object's cache while the
     run goes on, and a cancelled run keeps the frames computed (the modal operator's timer calls

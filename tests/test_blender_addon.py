@@ -114,6 +114,25 @@ def test_a_cloth_pinned_to_a_moving_turning_object_follows_it(tmp_path):
     assert np.abs(cloth[-1, free] - animated[-1, free]).max() > 0.05        # and hangs
 
 
+def test_pin_weights_below_one_are_springs_of_that_share_of_the_pin_stiffness(tmp_path):
+    import tomllib
+
+    result = in_blender("soft_pins", tmp_path)
+    assert result["error"] == ""
+    scene = tomllib.loads((tmp_path / "exported" / "scene.toml").read_text())
+    pins = scene["bodies"][0]["pins"]
+    assert [pin.get("stiffness") for pin in pins] == [None, 100.0]     # hard, then 0.5 x 200
+    assert sorted(pins[0]["particles"]) == sorted(result["hard"])
+    assert sorted(pins[1]["particles"]) == sorted(result["soft"])
+    rest, last = np.asarray(result["rest"]), np.asarray(result["last"])
+    assert np.abs(last[result["hard"]] - rest[result["hard"]]).max() <= ON_PATH
+    sag = rest[result["soft"], 2] - last[result["soft"], 2]
+    # the soft edge carries about half the cloth's weight (0.3 kg/m^2 x 1 m^2) on 20 springs
+    # of 100 N/m: it gives by m g / 2 / (20 k), not more (it is held), not 0 (it is no hard pin)
+    expected = 0.3 * 1.0 * 9.81 / 2 / (len(result["soft"]) * 100.0)
+    assert 0.5 * expected < sag.mean() < 1.5 * expected
+
+
 def test_a_wind_field_blows_the_cloth_its_way_harder_with_more_strength(tmp_path):
     result = in_blender("wind", tmp_path)
     push = {}
