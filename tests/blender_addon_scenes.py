@@ -198,6 +198,62 @@ def failures(folder: Path) -> dict:
     return result
 
 
+def armature_pin(folder: Path) -> dict:
+    """A cloth whose pinned edge an armature bends (the cloth's weights to the bone grow across
+    it, so the deformation is no rigid motion): the pins follow the deformed mesh."""
+    frames = 24
+    fresh(folder, frames)
+    bpy.ops.object.armature_add(location=(0, 0, 1))
+    rig = bpy.context.object
+    cloth, pinned = grid_cloth(location=(0, 0, 1))
+    bone = cloth.vertex_groups.new(name="Bone")
+    for vertex in cloth.data.vertices:
+        bone.add([vertex.index], float(vertex.co.x + 0.5), "REPLACE")
+    modifier = cloth.modifiers.new("Armature", "ARMATURE")
+    modifier.object = rig
+    pose = rig.pose.bones["Bone"]
+    pose.rotation_mode = "XYZ"
+    pose.keyframe_insert("location", frame=1)
+    pose.keyframe_insert("rotation_euler", frame=1)
+    pose.location = (0.0, 0.3, 0.2)
+    pose.rotation_euler = (math.radians(30), 0, 0)
+    pose.keyframe_insert("location", frame=frames)
+    pose.keyframe_insert("rotation_euler", frame=frames)
+    error = simulate()
+    frame_list = list(range(1, frames + 1))
+    return {"error": error, "pinned": pinned, "frames": frame_list,
+            "cloth": frames_of(cloth, frame_list),
+            "animated": frames_of(cloth, frame_list, cache=False)}
+
+
+def deforming_collider(folder: Path) -> dict:
+    """A cloth hanging from its top edge; a sphere collider that a shape key swells into it."""
+    frames = 24
+    scene = fresh(folder, frames)
+    cloth, _ = grid_cloth(rotation=(math.radians(90), 0, 0))
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.1, segments=32, ring_count=16,
+                                         location=(0.05, -0.3, 0.95))
+    sphere = bpy.context.object
+    sphere.springsim.role = "COLLIDER"
+    sphere.shape_key_add(name="Basis")
+    swell = sphere.shape_key_add(name="Swell")
+    for point in swell.data:
+        point.co = point.co * 3.0          # radius 0.3: through the cloth at y = 0
+    swell.value = 0.0
+    swell.keyframe_insert("value", frame=1)
+    swell.value = 1.0
+    swell.keyframe_insert("value", frame=frames)
+    error = simulate()
+    frame_list = list(range(1, frames + 1))
+    radius = {}
+    for frame in frame_list:
+        scene.frame_set(frame)
+        radius[frame] = 0.1 * (1 + 2 * swell.value)
+    return {"error": error, "frames": frame_list, "cloth": frames_of(cloth, frame_list),
+            "centre": [0.05, -0.3, 0.95], "radius": radius,
+            "exported": open(folder / "scene_springsim" / "Scene" / "scene" / "scene.toml").read()}
+
+
 def soft_pins(folder: Path) -> dict:
     """A flat grid held by its +y edge at weight 1 and its -y edge at weight 0.5."""
     frames = 24

@@ -114,6 +114,31 @@ def test_a_cloth_pinned_to_a_moving_turning_object_follows_it(tmp_path):
     assert np.abs(cloth[-1, free] - animated[-1, free]).max() > 0.05        # and hangs
 
 
+def test_a_cloth_pinned_to_an_armature_deformed_mesh_follows_the_deformation(tmp_path):
+    result = in_blender("armature_pin", tmp_path)
+    assert result["error"] == ""
+    frames, pinned = result["frames"], result["pinned"]
+    cloth = np.array([result["cloth"][str(f)] for f in frames])
+    animated = np.array([result["animated"][str(f)] for f in frames])
+    moved = np.linalg.norm(animated[-1, pinned] - animated[0, pinned], axis=1)
+    assert moved.max() > 0.2 and moved.max() - moved.min() > 0.1     # bent, not moved rigidly
+    assert np.abs(cloth[:, pinned] - animated[:, pinned]).max() <= ON_PATH
+
+
+def test_a_swelling_collider_pushes_the_cloth_and_none_of_it_gets_inside(tmp_path):
+    result = in_blender("deforming_collider", tmp_path)
+    assert result["error"] == ""
+    assert "[terrains.animation]" in result["exported"]
+    centre = np.asarray(result["centre"])
+    pushed = 0.0
+    for frame in result["frames"]:
+        cloth = np.asarray(result["cloth"][str(frame)])
+        inscribed = result["radius"][str(frame)] * np.cos(np.pi / 16)
+        assert np.linalg.norm(cloth - centre, axis=1).min() >= inscribed - 2e-3, frame
+        pushed = max(pushed, cloth[:, 1].max())
+    assert pushed > 0.01                               # the sphere swelled through y = 0
+
+
 def test_pin_weights_below_one_are_springs_of_that_share_of_the_pin_stiffness(tmp_path):
     import tomllib
 

@@ -93,6 +93,7 @@ class SPRINGSIM_OT_simulate(bpy.types.Operator):
 
     _run = None
     _timer = None
+    running = None       # the interface's run in progress, one at a time
 
     def execute(self, context):
         try:
@@ -109,8 +110,13 @@ class SPRINGSIM_OT_simulate(bpy.types.Operator):
     def invoke(self, context, event):
         if bpy.app.background:
             return self.execute(context)
+        if SPRINGSIM_OT_simulate.running is not None and SPRINGSIM_OT_simulate.running.running:
+            say(self, context, "ERROR", "springsim: a simulation is already running (Esc "
+                                        "cancels it)")
+            return {"CANCELLED"}
         try:
             self._run = start_run(context)
+            SPRINGSIM_OT_simulate.running = self._run
         except (SetupError, RunFailed) as error:
             say(self, context, "ERROR", str(error))
             return {"CANCELLED"}
