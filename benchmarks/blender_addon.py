@@ -16,8 +16,12 @@ collider. Measured, in wall-clock seconds on this machine:
 The issue's bar: Simulate costs at most 20% more than `springsim run`, plus at most 3 s. Run
 twice the first time (Numba compiles springsim's kernels once, then loads them from its cache):
 
-    .venv/bin/python benchmarks/blender_addon.py
+    .venv/bin/python benchmarks/blender_addon.py [--picture docs/images/blender-cloths.png]
+
+``--picture`` also renders both cloths at frame 36 with Cycles: springsim's on the left, Blender's
+on the right.
 """
+import math
 import os
 import platform
 import subprocess
@@ -34,33 +38,38 @@ import springsim_blender
 FRAMES, FPS, SIDE = 120, 24, 50
 
 
-def hanging_grid(role: bool):
+def empty_scene():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = FPS, 1.0
     scene.frame_start, scene.frame_end = 1, FRAMES
+    return scene
+
+
+def hanging_grid(x: float):
+    """The 50 x 50 grid, 1 m square, flat at 1 m, its +y edge in the vertex group 'pin'."""
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=SIDE - 1, y_subdivisions=SIDE - 1, size=1.0,
-                                    location=(0, 0, 1))
+                                    location=(x, 0, 1))
     cloth = bpy.context.object
     group = cloth.vertex_groups.new(name="pin")
     top = max(v.co.y for v in cloth.data.vertices)
     group.add([v.index for v in cloth.data.vertices if v.co.y > top - 1e-6], 1.0, "REPLACE")
-    if role:
-        cloth.springsim.role = "CLOTH"
-        cloth.springsim.pin_group = "pin"
-        scene.springsim.self_collision = False
-    return scene, cloth
+    assert len(cloth.data.vertices) == SIDE * SIDE
+    return cloth
 
 
-def simulate_in_blender(folder: Path) -> tuple[float, Path]:
-    scene, cloth = hanging_grid(role=True)
+def simulate_in_blender(folder: Path) -> tuple[float, Path, object]:
+    scene = empty_scene()
+    cloth = hanging_grid(-0.6)
+    cloth.springsim.role = "CLOTH"
+    cloth.springsim.pin_group = "pin"
+    scene.springsim.self_collision = False
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "bench.blend"))
     started = time.perf_counter()
     bpy.ops.springsim.simulate()
     seconds = time.perf_counter() - started
-    assert len(cloth.data.vertices) == SIDE * SIDE
     bpy.ops.springsim.export_scene(filepath=str(folder / "exported"))
-    return seconds, folder / "exported"
+    return seconds, folder / "exported", cloth
 
 
 def springsim_run(exported: Path) -> float:
@@ -70,8 +79,12 @@ def springsim_run(exported: Path) -> float:
     return time.perf_counter() - started
 
 
-def blender_cloth() -> float:
-    scene, cloth = hanging_grid(role=False)
+def blender_cloth(springsim_cloth) -> float:
+    """Blender's cloth on a copy of the grid beside springsim's (hidden meanwhile, so that only
+    Blender's cloth is evaluated), stepped through the frames from frame 1."""
+    scene = bpy.context.scene
+    springsim_cloth.hide_viewport = True
+    cloth = hanging_grid(0.6)
     modifier = cloth.modifiers.new("Cloth", "CLOTH")
     modifier.settings.vertex_group_mass = "pin"
     modifier.collision_settings.use_self_collision = False
@@ -79,16 +92,36 @@ def blender_cloth() -> float:
     started = time.perf_counter()
     for frame in range(1, FRAMES + 1):
         scene.frame_set(frame)
-    return time.perf_counter() - started
+    seconds = time.perf_counter() - started
+    springsim_cloth.hide_viewport = False
+    return seconds
+
+
+def picture(path: str, frame: int) -> None:
+    """Both cloths at ``frame``, springsim's on the left, Blender's on the right (Cycles)."""
+    scene = bpy.context.scene
+    bpy.ops.object.camera_add(location=(0.0, -3.2, 0.55), rotation=(math.radians(88), 0, 0))
+    scene.camera = bpy.context.object
+    bpy.ops.object.light_add(type="SUN", rotation=(math.radians(40), math.radians(20), 0))
+    bpy.context.object.data.energy = 3.0
+    scene.world = bpy.data.worlds.new("World")
+    scene.world.color = (0.6, 0.6, 0.65)
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 16
+    scene.render.resolution_x, scene.render.resolution_y = 640, 360
+    scene.render.filepath = str(Path(path).resolve())
+    scene.frame_set(frame)
+    bpy.ops.render.render(write_still=True)
 
 
 def main() -> None:
     springsim_blender.register()
     with tempfile.TemporaryDirectory() as folder:
-        simulate, exported = simulate_in_blender(Path(folder))
+        simulate, exported, cloth = simulate_in_blender(Path(folder))
         run = springsim_run(exported)
-    springsim_blender.unregister()
-    blender = blender_cloth()
+        blender = blender_cloth(cloth)
+        if "--picture" in sys.argv:
+            picture(sys.argv[sys.argv.index("--picture") + 1], frame=36)
     print(f"# {date.today()}, {platform.node()}, {os.cpu_count()} cores, Blender "
           f"{bpy.app.version_string}; {SIDE * SIDE} vertices, {FRAMES} frames at {FPS} fps")
     print("| what | wall s | ms per frame |")
