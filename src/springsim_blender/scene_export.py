@@ -188,9 +188,12 @@ def sample(scene, objects, frames) -> dict:
             modifier.show_viewport = shown
     result = {}
     for obj in objects:
+        counts = {len(frame) for frame in vertices[obj.name]}
+        if len(counts) > 1:
+            raise SetupError(f"{obj.name!r} changes its vertex count from frame to frame "
+                             f"({min(counts)} to {max(counts)}): a point cache needs one count")
         points = np.stack(vertices[obj.name])
-        if len(points) > 1 and (points.shape[1] != points[0].shape[0] or
-                                np.abs(points - points[0]).max() <= STILL):
+        if len(points) > 1 and np.abs(points - points[0]).max() <= STILL:
             points = points[:1]
         result[obj.name] = Sampled(np.stack(matrices[obj.name]), points, faces[obj.name])
     return result
