@@ -294,7 +294,32 @@ def streaming(folder: Path) -> dict:
     run.cancel()
     cache = run.caches["Cloth"]
     kept = int(np.fromfile(cache, "<i4", count=8)[7])
-    return {"seen": seen, "whole": whole, "cancelled_at": run.shown, "kept": kept}
+    return {"seen": seen, "whole": whole, "cancelled_at": run.shown, "kept": kept,
+            "modal": modal_operator(folder)}
+
+
+def modal_operator(folder: Path) -> dict:
+    """The modal operator's own methods, driven by stand-in timer and Esc events (bpy as a
+    module has no window to send them): a run to the end, then one cancelled."""
+    import time
+    from types import SimpleNamespace
+
+    from springsim_blender.operators import SPRINGSIM_OT_simulate, start_run
+
+    reports = []
+    answers = []
+    for cancel_after in (None, 3):
+        operator = SimpleNamespace(_run=start_run(bpy.context), _timer=None,
+                                   report=lambda kind, text: reports.append(text),
+                                   _end=lambda context: None)
+        answer, ticks = {"PASS_THROUGH"}, 0
+        while answer == {"PASS_THROUGH"}:
+            time.sleep(0.05)
+            ticks += 1
+            kind = "ESC" if cancel_after and operator._run.shown >= cancel_after else "TIMER"
+            answer = SPRINGSIM_OT_simulate.modal(operator, bpy.context, SimpleNamespace(type=kind))
+        answers.append(sorted(answer))
+    return {"answers": answers, "reports": reports}
 
 
 if __name__ == "__main__":

@@ -190,6 +190,10 @@ def test_frames_reach_blender_while_the_run_goes_on_and_cancel_keeps_them(tmp_pa
     assert len(set(partial)) >= 2                        # several partial takes were shown
     assert result["seen"] == sorted(result["seen"])
     assert 5 <= result["kept"] == result["cancelled_at"] < 48
+    modal = result["modal"]
+    assert modal["answers"] == [["FINISHED"], ["CANCELLED"]]
+    assert modal["reports"][0] == "springsim: simulated 48 frames"
+    assert modal["reports"][1].startswith("springsim: cancelled; kept the ")
 
 
 def test_failures_are_one_line_reports_and_blender_keeps_running(tmp_path):
