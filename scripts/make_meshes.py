@@ -38,6 +38,10 @@ def main() -> None:
                                    minor_sections=20)
     torus.export(FOLDER / "torus.obj")
     stairs().export(FOLDER / "stairs.obj")
+    # the jelly-conveyor's platform: a 4 x 0.3 x 2 m box, its top face at y = 0
+    platform = trimesh.creation.box(extents=(4.0, 0.3, 2.0))
+    platform.apply_translation((0.0, -0.15, 0.0))
+    platform.export(FOLDER / "platform.obj")
     for path in sorted(FOLDER.glob("*.obj")):
         print(path, path.stat().st_size, "bytes")
 

@@ -193,6 +193,21 @@ MOTION_NOTES = {
     "motion.pivot": ("m", "the point the rotations turn about; left out, the terrain's anchor "
                           "(a sphere's centre, a plane's point) or the pinned particles' centre"),
 }
+ANIMATION_NOTES = {
+    "animation.file": ("", "a point cache (PC2 or MDD, as Blender's and Houdini's exporters "
+                           "write them); relative to the scene file's folder"),
+    "animation.fps": ("frames/s", "a PC2's frame rate: sample k is at start + k rate / fps "
+                                  "(an MDD carries its own times)"),
+    "animation.start": ("s", "the time of the cache's first sample"),
+}
+NOTES |= {"terrains/mesh/animation": ("", "deforms the mesh by a point cache of its file's "
+                                          "vertices (file order, the file's frame) "
+                                          "([Scene files](../scene-files.md#deforming-terrains))"),
+          "bodies/*/pins.N.animation": ("", "moves the pinned particles with a point cache of "
+                                            "the body's points (a mesh cloth's file vertices, "
+                                            "or the particles)")}
+NOTES |= {f"terrains/mesh/{key}": note for key, note in ANIMATION_NOTES.items()}
+NOTES |= {f"bodies/*/pins.N.{key}": note for key, note in ANIMATION_NOTES.items()}
 NOTES |= {f"terrains/*/{key}": note for key, note in MOTION_NOTES.items()}
 NOTES |= {f"bodies/*/pins.N.{key}": note for key, note in MOTION_NOTES.items()}
 

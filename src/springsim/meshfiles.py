@@ -248,6 +248,15 @@ class Welded(NamedTuple):
     of_file_vertex: np.ndarray   # (V,) int64: the welded vertex of each file vertex
 
 
+def first_file_vertex(of_file_vertex: np.ndarray) -> np.ndarray:
+    """(W,) each welded vertex's first file vertex: where a per-file-vertex array (a point
+    cache) gives the welded vertex its value."""
+    first = np.full(int(of_file_vertex.max()) + 1 if len(of_file_vertex) else 0,
+                    len(of_file_vertex), np.int64)
+    np.minimum.at(first, of_file_vertex, np.arange(len(of_file_vertex)))
+    return first
+
+
 def weld(vertices: np.ndarray, tolerance: float = 1e-9) -> Welded:
     """Vertices at the same position (within ``tolerance`` of the mesh's size) made one: a file
     splits a vertex along its UV and normal seams, and a body or cloth must not split there."""

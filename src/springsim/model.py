@@ -44,6 +44,9 @@ class ModelArrays(NamedTuple):
     # poses at the time last asked for (world.move_world), and the pins that move: particle,
     # motion row, and where the particle started (in the motion's frame at its placing)
     terrain_motion: np.ndarray   # (T,) int64
+    # where each deforming terrain's block starts in terrain_data (-1: it keeps its shape),
+    # refitted to the time by world.move_world (terrains/deforming_mesh.py)
+    terrain_deforming: np.ndarray   # (T,) int64
     motion_info: np.ndarray      # (M, motion.INFO)
     motion_keys: np.ndarray      # (K, motion.KEY)
     motion_pose: np.ndarray      # (M, motion.POSE), written by the kernels

@@ -126,6 +126,20 @@ class Motion:
         return (np.asarray(points, float) - pose[12:15]) @ rotation.T + pose[9:12]
 
 
+@dataclass
+class Path(Motion):
+    """One point's own path (a pin's animation, bodies/pins.py): its ``displacements`` (F, 3)
+    from where it starts at the sample ``times`` (F,), linear between them."""
+
+    times: np.ndarray = None
+    displacements: np.ndarray = None
+
+    def pack(self, first_key: int, anchor=(0.0, 0.0, 0.0)):
+        info = [LINEAR, first_key, len(self.times), *map(float, anchor), *[0.0] * 6]
+        keys = np.column_stack([self.times, self.displacements, np.zeros((len(self.times), 3))])
+        return np.asarray(info, float), keys
+
+
 def pack_motions(motions) -> tuple[np.ndarray, np.ndarray]:
     """motion_info (M, INFO) and motion_keys (K, KEY) for a list of (Motion, anchor) (never
     empty arrays: one array type whatever the scene)."""

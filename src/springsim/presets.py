@@ -6,10 +6,17 @@ import numpy as np
 from .bodies.balls import Ball, Balls
 from .bodies.cloth import Cloth
 from .bodies.cube import Cube
+from .animation import Animation
+from .bodies.cloth_material import ClothMaterial
 from .bodies.mesh import MeshBody
+from .bodies.pins import Pin, Region
 from .errors import SceneError
 from .scene import Scene
+from .motion import Keyframe, Motion
 from .terrains import Bowl, MeshTerrain, Plane, Sphere, tilted_plane
+from .walking_figure import FPS as FIGURE_FPS
+from .wind import Gusts, Wind
+from .walking_figure import SHOULDER, figure_files, shoulder_keyframes
 
 # meshes made by scripts/make_meshes.py (trimesh.creation), shipped with the package
 MESHES = Path(__file__).resolve().parent / "meshes"
@@ -81,6 +88,70 @@ def cloth_drape() -> Scene:
                  duration=4.0)
 
 
+def hanging_sheet(particles: int, width: float, height: float, top: float, pins_at: str,
+                  **place) -> Cloth:
+    """A cloth hanging in the plane z = 0 (turned up from the grid's xz plane) with a light
+    cotton-like material, pinned along its top edge ("top") or its -x edge ("side")."""
+    cloth = Cloth(particles_per_edge=particles, width=width, height=height, pinned="none",
+                  rotation_degrees=90.0, rotation_axis=(1.0, 0.0, 0.0),
+                  material=ClothMaterial(density=0.2), **place)
+    x, y = cloth.position[0], cloth.position[1]
+    edge = (Region(min=(-10.0, top - 0.01, -0.1), max=(10.0, top + 0.01, 0.1)) if pins_at == "top"
+            else Region(min=(x - width / 2 - 0.01, y - height, -0.1),
+                        max=(x - width / 2 + 0.01, y + height, 0.1)))
+    cloth.pins = [Pin(region=edge)]
+    return cloth
+
+
+def flag() -> Scene:
+    """A 1.5 x 1 m flag (25 x 25) held along its -x edge, in a 6 m/s wind with gusts."""
+    cloth = hanging_sheet(25, 1.5, 1.0, 2.5, "side", position=(0.75, 2.0, 0.0))
+    wind = Wind(velocity=(6.0, 0.0, 0.0), friction=0.02, gusts=Gusts(0.3, 1.0, 1))
+    return Scene(name="flag", bodies=[cloth], terrains=[Plane(point=(0.0, 0.0, 0.0))], wind=wind,
+                 integrator="implicit_euler", dt=1 / 60, duration=6.0)
+
+
+def cloth_sweep() -> Scene:
+    """A 2 x 2 m curtain (25 x 25) hanging from its top edge, struck by a sphere of radius
+    0.3 m that passes through it at 5 m/s."""
+    cloth = hanging_sheet(25, 2.0, 2.0, 2.2, "top", position=(0.0, 1.2, 0.0))
+    sweep = Motion(keyframes=[Keyframe(time=0.3), Keyframe(time=0.9, position=(0.0, 0.0, 3.0))])
+    ball = Sphere(center=(0.0, 1.0, -1.5), radius=0.3, restitution=0.0, motion=sweep)
+    return Scene(name="cloth-sweep", bodies=[cloth],
+                 terrains=[Plane(point=(0.0, 0.0, 0.0)), ball],
+                 integrator="implicit_euler", dt=1 / 60, duration=3.0)
+
+
+def jelly_conveyor() -> Scene:
+    """Three jelly cubes riding a 4 x 2 m platform that moves at 0.4 m/s and turns at
+    0.25 rad/s about its middle: static friction carries them along."""
+    cubes = [Cube(particles_per_edge=4, edge_length=0.5, position=(x, 0.4, 0.0))
+             for x in (-1.2, 0.0, 1.2)]
+    platform = MeshTerrain(file=str(MESHES / "platform.obj"), friction=0.8, restitution=0.2,
+                           motion=Motion(velocity=(0.4, 0.0, 0.0),
+                                         angular_velocity=(0.0, 0.25, 0.0)))
+    return Scene(name="jelly-conveyor", bodies=cubes,
+                 terrains=[platform, Plane(point=(0.0, -2.0, 0.0))],
+                 integrator="implicit_euler", dt=1 / 60, duration=6.0)
+
+
+def cape() -> Scene:
+    """A cape (a 50 x 50 cloth, 0.5 x 0.8 m) pinned along its top edge to the shoulders of a
+    figure that walks a turning path swinging its arms and legs (walking_figure.py: a mesh
+    terrain of about 10,000 triangles that a point cache deforms); implicit_euler at 1/60 s."""
+    files = figure_files()
+    figure = MeshTerrain(file=str(files.mesh), friction=0.4, restitution=0.0,
+                         animation=Animation(str(files.cache), fps=FIGURE_FPS))
+    shoulders = Pin(region=Region(min=(-1.0, SHOULDER[1] - 0.005, -1.0),
+                                  max=(1.0, SHOULDER[1] + 0.005, 0.0)),
+                    motion=Motion(keyframes=shoulder_keyframes(), pivot=(0.0, 0.0, 0.0)))
+    cloth = Cloth(particles_per_edge=50, width=0.5, height=0.8, pinned="none",
+                  position=(0.0, SHOULDER[1] - 0.4, -0.25), rotation_degrees=90.0,
+                  rotation_axis=(1.0, 0.0, 0.0), material=ClothMaterial(), pins=[shoulders])
+    return Scene(name="cape", bodies=[cloth], terrains=[Plane(point=(0.0, 0.0, 0.0)), figure],
+                 integrator="implicit_euler", dt=1 / 60, duration=6.0)
+
+
 PRESETS = {
     "jelly-plane": (lambda: jelly("jelly-plane", Plane()),
                     "the 10^3 jelly cube dropped on the plane y = -1"),
@@ -99,6 +170,11 @@ PRESETS = {
     "cloth-drape": (cloth_drape, "a cloth falls over a jelly cube and folds onto itself on the "
                                  "floor; dt 1e-4"),
     "cloth-balls-100": (ball_rain_on_cloth, "benchmark: 100 balls falling on a 100 x 100 cloth"),
+    "flag": (flag, "a flag held along one edge in a gusty 6 m/s wind"),
+    "cloth-sweep": (cloth_sweep, "a hanging curtain struck by a sphere passing at 5 m/s"),
+    "jelly-conveyor": (jelly_conveyor, "jelly cubes riding a moving, turning platform"),
+    "cape": (cape, "a cape pinned to the shoulders of a walking, turning figure (a mesh collider "
+                   "that a point cache deforms)"),
 }
 
 

@@ -119,9 +119,14 @@ def read_scene_file(path: Path) -> Scene:
 
 
 def files_relative_to(scene: Scene, folder: Path) -> Scene:
-    """The scene with every body's and terrain's relative ``file`` (a mesh) made relative to
-    ``folder``, the scene file's: a scene file and its meshes move together."""
-    for item in [*scene.bodies, *scene.terrains]:
+    """The scene with every body's and terrain's relative ``file`` (a mesh), and every relative
+    point cache of theirs or their pins' (``animation.file``), made relative to ``folder``, the
+    scene file's: a scene file and its meshes move together."""
+    items = [*scene.bodies, *scene.terrains]
+    items += [item.animation for item in items if getattr(item, "animation", None)]
+    items += [pin.animation for body in scene.bodies for pin in getattr(body, "pins", [])
+              if getattr(pin, "animation", None)]
+    for item in items:
         file = getattr(item, "file", None)
         if isinstance(file, str) and file and not Path(file).expanduser().is_absolute():
             item.file = str(folder / file)

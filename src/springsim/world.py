@@ -38,6 +38,7 @@ import numpy as np
 from ._jit import inline_kernel, kernel
 from .bodies.pins import followed_terrain
 from .motion import POSE, Motion, pack_motions, pose_into
+from .terrains.deforming_mesh import deform, deformed_velocity
 from .terrains import terrain_distance
 
 
@@ -52,9 +53,12 @@ def pack_world(terrains, built, offsets) -> dict:
                                        if terrain.motion is not None)}
     particles, rows_of_pins, placed, stiffness, damping = [], [], [], [], []
     for body, start in zip(built, offsets):
-        for chosen, pin in body.moving_pins:
+        for chosen, pin, paths in body.moving_pins:
             where = body.positions[chosen]
-            if pin.motion is not None or not pin.follow:   # a soft pin that holds: no motion
+            if paths is not None:   # an animation: a path of its own for each particle
+                row = np.arange(len(motions), len(motions) + len(chosen))
+                motions += [(path, anchor) for path, anchor in zip(paths, where)]
+            elif pin.motion is not None or not pin.follow:   # a soft pin that holds: no motion
                 row = len(motions)
                 motions.append((pin.motion or Motion(), where.mean(axis=0)))
             else:
@@ -67,7 +71,7 @@ def pack_world(terrains, built, offsets) -> dict:
                 pose = terrain.motion.pose(0.0, terrain.anchor())
                 where = (where - pose[9:12]) @ pose[:9].reshape(3, 3) + pose[12:15]
             particles.append(chosen + start)
-            rows_of_pins.append(np.full(len(chosen), row, np.int64))
+            rows_of_pins.append(np.broadcast_to(np.asarray(row, np.int64), len(chosen)))
             placed.append(where)
             soft = pin.stiffness is not None
             stiffness.append(np.full(len(chosen), float(pin.stiffness) if soft else 0.0))
@@ -89,6 +93,9 @@ def move_world(model, t):
     model.clock[2] = t
     for m in range(model.motion_info.shape[0]):
         pose_into(model.motion_info, model.motion_keys, m, t, model.motion_pose[m])
+    for terrain in range(model.terrain_deforming.shape[0]):
+        if model.terrain_deforming[terrain] >= 0:
+            deform(model.terrain_data, model.terrain_deforming[terrain], t)
 
 
 @kernel
@@ -166,7 +173,10 @@ def terrain_at(model, t, x0, x1, x2, radius):
 
 @inline_kernel
 def surface_velocity(model, t, x0, x1, x2):
-    """Velocity (m/s) of terrain t's material at the world point (x0, x1, x2): c' + w x (y - c)."""
+    """Velocity (m/s) of terrain t's material at the world point (x0, x1, x2): c' + w x (y - c),
+    or a deforming terrain's at its closest point."""
+    if model.terrain_deforming[t] >= 0:
+        return deformed_velocity(model.terrain_data, model.terrain_deforming[t], x0, x1, x2)
     if model.terrain_motion[t] < 0:
         return 0.0, 0.0, 0.0
     p = model.motion_pose[model.terrain_motion[t]]

@@ -29,13 +29,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import SceneError, is_finite, require, require_angle
-from ..meshfiles import fan_triangles, placed, read_mesh_file
+from ..meshfiles import fan_triangles, first_file_vertex, placed, read_mesh_file
 from ..sizes import BYTES_PER_PARTICLE, gigabytes, machine_memory
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from ..surfaces import Embedding
 from . import BuiltBody
 from .cloth_material import ClothMaterial, lumped_masses, material_constants
-from .pins import Pin, moving_pins, pinned_mask
+from .pins import Pin, moving_pins, particle_cache, pinned_mask
 from .sheet_mesh import SheetMesh, sheet_mesh
 from ..collision.shapes.settings import SurfaceContact
 
@@ -172,7 +172,7 @@ class Cloth(SurfaceContact):
         moving = []
         if self.pins:
             pinned |= pinned_mask(self.pins, positions, self._groups(), "pins")
-            moving = moving_pins(self.pins, positions, self._groups())
+            moving = moving_pins(self.pins, positions, self._groups(), self._cache_points)
         in_no_face = np.bincount(faces[faces >= 0], minlength=count) == 0
         pinned |= in_no_face             # it has no spring to move with
         masses[in_no_face] = float(self.particle_mass)
@@ -274,6 +274,20 @@ class Cloth(SurfaceContact):
         path = Path(self.file).expanduser().resolve()
         status = path.stat()
         return _cached_sheet(str(path), status.st_mtime_ns, status.st_size)
+
+    def _cache_points(self, points: np.ndarray, key: str) -> np.ndarray:
+        """A pin animation's samples (F, V, 3) as the particles (F, P, 3): a grid's particles
+        as they are; a file's vertices placed as the cloth is, each particle taking its first
+        file vertex."""
+        if not self.file:
+            return particle_cache(self.particles_per_edge ** 2)(points, key)
+        count = self._file_vertex_count(key)
+        require(points.shape[1] == count, f"{key}.file", points.shape[1],
+                f"points in the cache, but the cloth's file has {count} vertices")
+        first = first_file_vertex(self.sheet().of_file_vertex)
+        return np.stack([placed(_as_triangle_mesh(frame[first]), self.scale,
+                                self.rotation_degrees, self.rotation_axis,
+                                self.position).vertices for frame in points])
 
     def _file_vertex_count(self, key: str) -> int:
         return len(read_mesh_file(self.file, key).vertices)

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import is_finite, require, require_angle
 from ..springs import SpringKind, SpringParameters, lattice_springs
 from . import BuiltBody
-from .pins import Pin, moving_pins, pinned_mask
+from .pins import Pin, moving_pins, particle_cache, pinned_mask
 from ..collision.shapes.settings import SurfaceContact
 
 STRUCTURAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
@@ -133,7 +133,7 @@ class Cube(LatticeSprings, SurfaceContact):
             spring_kind=kinds,
             spring_parameters=spring_parameters(self),
             surface=cube_surface(index),
-            moving_pins=moving_pins(self.pins, positions, {}),
+            moving_pins=moving_pins(self.pins, positions, {}, particle_cache(n ** 3)),
         )
 
 

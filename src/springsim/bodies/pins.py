@@ -20,7 +20,11 @@ Where the chosen particles go:
   frame, x(t) = pivot + position(t) + R(t) (x_start - pivot), the pivot defaulting to the mean of
   the chosen particles' starting positions;
 - ``follow = "terrains.N"``: the particles keep their place in terrain N's moving frame (its own
-  motion, about its own pivot); a terrain that does not move holds them still.
+  motion, about its own pivot); a terrain that does not move holds them still;
+- ``animation``: a point cache (animation.py) of the body's own points, as an animated copy of
+  it in Blender or Houdini writes it: each chosen particle goes where its point goes. The cache
+  lists a mesh cloth's file vertices (file order, the file's frame: placed as the cloth is), or
+  the particles of a grid cloth or a cube (scene coordinates).
 
 A pin is hard by default: the particle is exactly on its path at the end of every step, under
 every integrator (world.py), and moves with the path's velocity. With ``stiffness`` (N/m) it is
@@ -29,11 +33,13 @@ velocity relative to the path.
 """
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from ..animation import Animation
 from ..errors import SceneError, is_finite, require
-from ..motion import Motion
+from ..motion import Motion, Path
 
 FOLLOW = re.compile(r"terrains\.(0|[1-9][0-9]*)")
 
@@ -57,6 +63,7 @@ class Pin:
     follow: str = ""                                # "terrains.N": moves them with terrain N
     stiffness: float | None = None                  # N/m: a soft pin (a spring); unset: hard
     damping: float = 0.0                            # N s/m, a soft pin's damper
+    animation: Animation | None = None              # a point cache of the body's points
 
     def validate(self, key: str) -> None:
         if self.stiffness is not None:
@@ -66,6 +73,10 @@ class Pin:
                 "must be >= 0 N s/m")
         if self.motion is not None:
             self.motion.validate(f"{key}.motion")
+        if self.animation is not None:
+            require(self.motion is None and not self.follow, f"{key}.animation",
+                    self.animation.file, "a pin has one of motion, follow and animation")
+            self.animation.validate(f"{key}.animation")
         if self.follow:
             require(FOLLOW.fullmatch(self.follow) is not None, f"{key}.follow", self.follow,
                     'must name a terrain as "terrains.N" (N its number, from 0)')
@@ -132,11 +143,46 @@ def check_follows(pins, terrain_count: int, key: str) -> None:
                     "names no terrain: the scene has none")
 
 
-def moving_pins(pins, positions: np.ndarray, groups: dict) -> list:
-    """(particle numbers, pin) for each pin that moves (a motion or a followed terrain) or is
-    soft (a spring to where it starts)."""
-    return [(chosen_particles(pin, positions, groups, "pins"), pin) for pin in pins
-            if pin.motion is not None or pin.follow or pin.stiffness is not None]
+def particle_cache(count: int):
+    """``cache_points`` for a body whose cache lists its ``count`` particles as they are."""
+    def cache_points(points: np.ndarray, key: str) -> np.ndarray:
+        require(points.shape[1] == count, f"{key}.file", points.shape[1],
+                f"points in the cache, but the body has {count} particles")
+        return points
+    return cache_points
+
+
+class MovingPin(NamedTuple):
+    """A pin that moves or is soft: its particles, its table, and its particles' paths (a
+    Path each) where it has an animation."""
+
+    particles: np.ndarray
+    pin: Pin
+    paths: list | None = None
+
+
+def moving_pins(pins, positions: np.ndarray, groups: dict, cache_points=None) -> list:
+    """A MovingPin for each pin that moves (a motion, a followed terrain or an animation) or
+    is soft (a spring to where it starts). ``cache_points(cache, key)`` places an animation's
+    samples (F, V, 3) as the body's particles (F, P, 3); a body without it takes none."""
+    moving = []
+    for p, pin in enumerate(pins):
+        if pin.motion is None and not pin.follow and pin.stiffness is None and \
+                pin.animation is None:
+            continue
+        chosen = chosen_particles(pin, positions, groups, "pins")
+        paths = None
+        if pin.animation is not None:
+            key = f"pins.{p}.animation"
+            require(cache_points is not None, key, pin.animation.file,
+                    "moves the particles of a cloth or a cube; a mesh body's particles are "
+                    "not its file's vertices (pin them with a motion or follow instead)")
+            cache = pin.animation.cache(f"{key}.file")
+            placed = cache_points(cache.points, key)[:, chosen]
+            paths = [Path(times=cache.times, displacements=placed[:, j] - positions[i])
+                     for j, i in enumerate(chosen)]
+        moving.append(MovingPin(chosen, pin, paths))
+    return moving
 
 
 def describe(pin: Pin):

@@ -9,12 +9,13 @@ which covers a cube's or cloth's surface (one particle, weight 1), a mesh body's
 unit direction), so that one line computes any piece at every frame.
 """
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
 from ..render.drawing import is_closed
 from ..render.terrain_meshes import bowl_mesh, plane_basis, sphere_mesh
-from ..terrains import Bowl, Plane, Sphere
+from ..terrains import Bowl, MeshTerrain, Plane, Sphere
 
 BALL_LATITUDES, BALL_LONGITUDES = 8, 16     # a ball's sphere in a point cache: 114 vertices
 
@@ -113,15 +114,25 @@ def unique_names(names) -> list[str]:
 
 # --- terrains ---------------------------------------------------------------------------------
 
-def terrain_meshes(layout, positions) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """(name, vertices, triangles) of every terrain the layout knows a display mesh for."""
+class TerrainPiece(NamedTuple):
+    """A terrain's display mesh as placed (its vertices where it starts), and the terrain,
+    which says where they are at a later time (``vertices_at``) if it moves."""
+
+    name: str
+    vertices: np.ndarray
+    triangles: np.ndarray
+    terrain: object
+
+
+def terrain_meshes(layout, positions) -> list[TerrainPiece]:
+    """A TerrainPiece for every terrain the layout knows a display mesh for."""
     meshes = []
     for number, terrain in enumerate(layout.terrains):
         make = next((DISPLAY_MESHES[cls] for cls in type(terrain).__mro__
                      if cls in DISPLAY_MESHES), None)
         if make is not None:
             name = f"terrain_{number}_{type(terrain).__name__.lower()}"
-            meshes.append((name, *make(terrain, positions)))
+            meshes.append(TerrainPiece(name, *make(terrain, positions), terrain))
     return meshes
 
 
@@ -147,6 +158,12 @@ def bowl_display(bowl, positions):
     return bowl_mesh(bowl.center, bowl.radius)
 
 
+def mesh_display(terrain, positions):
+    shape = terrain.display_mesh(None, 0.0)   # the mesh itself, wherever the bodies are
+    return shape.vertices, shape.triangles
+
+
 # Display meshes by terrain class (the most derived class found wins: a Bowl is a Sphere).
-DISPLAY_MESHES = {Plane: plane_quad, Sphere: sphere_display, Bowl: bowl_display}
+DISPLAY_MESHES = {Plane: plane_quad, Sphere: sphere_display, Bowl: bowl_display,
+                  MeshTerrain: mesh_display}
 

@@ -2,7 +2,8 @@
 
 One stage: ``/take`` (the default prim) holding ``bodies/`` (a UsdGeom.Mesh per body surface with
 time-sampled points and extents), ``balls/`` (a UsdGeom.Sphere per ball with its radius and a
-time-sampled translate) and ``terrains/`` (static meshes). Frame k of the take is time code
+time-sampled translate) and ``terrains/`` (meshes, with time-sampled points where a terrain
+moves or deforms). Frame k of the take is time code
 start_frame + k (Blender and Houdini number frames from 1); the stage's timeCodesPerSecond (and framesPerSecond) is the recording's fps, its start and end
 time codes are the first and last frame, its up axis is Y (springsim's) and a unit is 1 m. The
 extension picks the encoding: .usda text, .usdc binary (crate), .usd binary.
@@ -16,7 +17,7 @@ from .geometry import body_pieces, terrain_meshes, unique_names
 from ..safe_files import staged_path
 
 EXTENSIONS = (".usd", ".usda", ".usdc")
-DESCRIPTION = "USD stage: animated body meshes, balls as spheres, static terrains"
+DESCRIPTION = "USD stage: animated body meshes, balls as spheres, terrains (moving ones animated)"
 INSTALL = "pip install 'springsim[export]' (usd-core)"
 
 
@@ -105,17 +106,25 @@ def _balls(stage, take) -> None:
 
 
 def _terrains(stage, take) -> None:
-    from pxr import Gf, UsdGeom, Vt
+    from pxr import Gf, Usd, UsdGeom, Vt
 
     meshes = terrain_meshes(take.layout, take.positions)
     if not meshes:
         return
     UsdGeom.Scope.Define(stage, "/take/terrains")
-    for name, vertices, triangles in meshes:
+    for name, vertices, triangles, terrain in meshes:
         mesh = _static_mesh(stage, f"/take/terrains/{_identifier(name)}", triangles, False)
-        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(vertices.astype(np.float32)))
-        mesh.CreateExtentAttr([Gf.Vec3f(*vertices.min(axis=0)), Gf.Vec3f(*vertices.max(axis=0))])
         mesh.CreateDisplayColorAttr([Gf.Vec3f(*colors.TERRAIN_COLOR)])
+        points, extent = mesh.CreatePointsAttr(), mesh.CreateExtentAttr()
+        # a terrain that moves or deforms has its points at every frame (a still one: once)
+        frames = range(take.frame_count) if terrain.moves() else [None]
+        for frame in frames:
+            here = vertices if frame is None else terrain.vertices_at(vertices, take.time[frame])
+            here = np.asarray(here, np.float32)
+            code = Usd.TimeCode.Default() if frame is None else take.start_frame + frame
+            points.Set(Vt.Vec3fArray.FromNumpy(here), code)
+            extent.Set(Vt.Vec3fArray.FromNumpy(np.stack([here.min(axis=0), here.max(axis=0)])),
+                       code)
 
 
 def _static_mesh(stage, path: str, triangles: np.ndarray, double_sided: bool):

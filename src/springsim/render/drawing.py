@@ -119,9 +119,12 @@ class SceneDrawing:
                                     lambda x, c=cloud, i=balls: c.update_point_positions(x[i])))
 
     def _add_terrains(self) -> None:
+        self.moving_terrains = []
         for number, terrain in enumerate(self.model.terrains):
             name = f"terrain {number}: {type(terrain).__name__.lower()}"
             drawn = _TerrainDrawing(name, terrain, self.positions)
+            if terrain.moves():
+                self.moving_terrains.append(drawn)
             follow = drawn.follow if drawn.shape.recentre_distance is not None else None
             self.parts.append(_Part(drawn.mesh, "terrains", follow))
             drawn.part = self.parts[-1]
@@ -134,12 +137,16 @@ class SceneDrawing:
         self.parts[-1].stale = True     # found only once shown: hidden, they cost nothing
 
     # --- use ------------------------------------------------------------------------------
-    def update(self, positions) -> bool:
-        """Move everything shown to ``positions``; a non-finite state is not drawn (False)."""
+    def update(self, positions, time: float | None = None) -> bool:
+        """Move everything shown to ``positions``, and the terrains that move to where they are
+        at ``time`` (s); a non-finite state is not drawn (False)."""
         positions = np.asarray(positions, float)
         if not np.all(np.isfinite(positions)):
             return False
         self.positions = positions.copy()
+        if time is not None:
+            for drawn in self.moving_terrains:
+                drawn.at_time(time)
         for part in self.parts:
             if part.follow is None:
                 continue
@@ -172,7 +179,7 @@ class _TerrainDrawing:
     def __init__(self, name, terrain, positions):
         self.name, self.terrain = name, terrain
         self.extent = float(np.max(positions.max(axis=0) - positions.min(axis=0)))
-        self.part = None
+        self.part, self.time = None, None
         self._build(positions.mean(axis=0))
 
     def _build(self, near) -> None:
@@ -195,6 +202,13 @@ class _TerrainDrawing:
         near = positions.mean(axis=0)
         if self.shape.needs_recentring(near):
             self._build(near)
+            if self.time is not None:
+                self.at_time(self.time)
+
+    def at_time(self, t: float) -> None:
+        """Draw the terrain where its motion or animation has it at time t (s)."""
+        self.time = t
+        self.mesh.update_vertex_positions(self.terrain.vertices_at(self.shape.vertices, t))
 
 
 class _ContactDrawing:

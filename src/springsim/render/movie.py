@@ -43,13 +43,14 @@ def render_video(model, times, positions, path, *, fps=60, width=960, height=540
     with FrameWriter(path, fps, width, height) as writer:
         for frame in tqdm(range(len(positions)), desc="rendering", unit="frame",
                           disable=not bar, file=sys.stderr):
-            image = draw_frame(drawing, cameras[frame], positions[frame])
+            image = draw_frame(drawing, cameras[frame], positions[frame], times[frame])
             writer.append(stamp_time(image, times[frame]))
     return writer.path
 
 
-def draw_frame(drawing: SceneDrawing, camera, positions) -> np.ndarray:
-    """The (H, W, 3) picture of ``positions`` seen by ``camera``, at the renderer's size."""
-    drawing.update(positions)
+def draw_frame(drawing: SceneDrawing, camera, positions, time=None) -> np.ndarray:
+    """The (H, W, 3) picture of ``positions`` (and the terrains at ``time``, s) seen by
+    ``camera``, at the renderer's size."""
+    drawing.update(positions, time)
     apply_camera(camera)
     return capture()

@@ -76,7 +76,7 @@ class WebReplay:
                                        position=first[particle])
             self._parts.append(("balls", ball, lambda x, b=ball, i=particle: setattr(
                 b, "position", x[i])))
-        for name, vertices, triangles in terrain_meshes(self.take.layout, self.take.positions):
+        for name, vertices, triangles, _ in terrain_meshes(self.take.layout, self.take.positions):
             mesh = scene.add_mesh_simple(f"/terrains/{name}", vertices.astype(np.float32),
                                          triangles.astype(np.uint32),
                                          color=rgb(colors.TERRAIN_COLOR), side="double")

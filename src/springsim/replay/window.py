@@ -35,7 +35,8 @@ class ReplayViewer:
         """polyscope's per-frame callback: the panel, then the clock, then the drawing."""
         self.build_panel()
         self.timeline.advance()
-        self.drawing.update(self.take.positions[self.timeline.frame])
+        frame = self.timeline.frame
+        self.drawing.update(self.take.positions[frame], float(self.take.time[frame]))
 
     def run(self, frames: int | None = None) -> None:
         show_frames(self.headless, frames)

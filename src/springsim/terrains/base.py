@@ -57,6 +57,14 @@ class Contact:
         """The point a motion's rotation turns the terrain about unless it names a pivot."""
         return (0.0, 0.0, 0.0)
 
+    def packed_kind(self) -> int:
+        """The kind number its row is packed as (a kind may pack as another: mesh.py)."""
+        return self.kind
+
+    def deforms(self) -> bool:
+        """Whether its data block is refitted as time goes (terrains/deforming_mesh.py)."""
+        return False
+
     def pose_at(self, t: float):
         """(R, c, pivot) at time t: the terrain as placed at x is at c + R (x - pivot) (the
         identity for a still terrain). For drawing and export."""
@@ -64,6 +72,14 @@ class Contact:
             return np.eye(3), np.zeros(3), np.zeros(3)
         pose = self.motion.pose(t, self.anchor())
         return pose[:9].reshape(3, 3), pose[9:12], pose[12:15]
+
+    def moves(self) -> bool:
+        """Whether it is drawn anew as time goes."""
+        return self.motion is not None
+
+    def vertices_at(self, vertices, t: float) -> np.ndarray:
+        """Its display mesh's ``vertices`` where they are at time t."""
+        return self.place_at(vertices, t)
 
     def place_at(self, points, t: float) -> np.ndarray:
         """``points`` of the terrain as placed, where they are at time t."""
@@ -91,17 +107,19 @@ def registered_kinds() -> list:
 
 def pack_terrains(terrains) -> dict:
     """Arrays the contact kernels read: a kind number, a parameter row and contact settings per
-    terrain, the data buffer they share, and each terrain's row of the motion table (-1: it
-    stands still)."""
+    terrain, the data buffer they share, where a deforming terrain's block starts in it (-1:
+    it keeps its shape) and each terrain's row of the motion table (-1: it stands still)."""
     count = len(terrains)
     packed = {"terrain_kind": np.zeros(count, np.int64),
               "terrain_parameters": np.zeros((count, PARAMETERS)),
               "terrain_restitution": np.zeros(count), "terrain_friction": np.zeros(count),
-              "terrain_epsilon": np.zeros(count)}
+              "terrain_epsilon": np.zeros(count),
+              "terrain_deforming": np.full(count, -1, np.int64)}
     data, length = [np.zeros(1)], 1   # never empty: one array type whatever the terrains
     for t, terrain in enumerate(terrains):
         row, own = terrain.pack(length)
-        packed["terrain_kind"][t] = terrain.kind
+        packed["terrain_kind"][t] = terrain.packed_kind()
+        packed["terrain_deforming"][t] = length if terrain.deforms() else -1
         packed["terrain_parameters"][t, :len(row)] = row
         packed["terrain_restitution"][t] = terrain.restitution
         packed["terrain_friction"][t] = terrain.friction

@@ -30,7 +30,9 @@ import numpy as np
 from .._jit import kernel
 from ..errors import SceneError, require
 from ..meshfiles import TriangleMesh, check_triangles, placed, read_mesh, validate_placement
+from ..animation import Animation, read_point_cache
 from .base import Contact, register
+from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
 
 BAND_CELLS = 3          # nodes within this many cells of the surface get exact distances
 MARGIN_CELLS = 4        # the grid reaches this many cells beyond the mesh's box
@@ -144,6 +146,7 @@ class MeshTerrain(Contact):
     rotation_axis: tuple = (0.0, 1.0, 0.0)
     position: tuple = (0.0, 0.0, 0.0)
     resolution: int = 128
+    animation: Animation | None = None   # a point cache it deforms by (deforming_mesh.py)
 
     distance_kernel = mesh_distance
     # a long lookup: contact does it a block of particles ahead (collision/response/terrain.py)
@@ -158,6 +161,37 @@ class MeshTerrain(Contact):
         require(isinstance(self.resolution, int) and 8 <= self.resolution <= 1024,
                 f"{key}.resolution", self.resolution, "must be a whole number in [8, 1024]")
         check_triangles(self.mesh(f"{key}.file"), f"{key}.file", self.file)
+        if self.animation is not None:
+            require(self.motion is None, f"{key}.animation", self.animation.file,
+                    "a mesh terrain moves by a motion or deforms by an animation, not both")
+            self.animation.validate(f"{key}.animation")
+            self.deforming_surface(key)   # the cache's point count against the file's
+
+    def packed_kind(self) -> int:
+        return DeformingMesh.kind if self.animation is not None else self.kind
+
+    def deforms(self) -> bool:
+        return self.animation is not None
+
+    def deforming_surface(self, key: str = "terrain") -> DeformingSurface:
+        """The surface its animation drives, placed as the mesh is (kept per file versions and
+        settings: validation, packing and drawing ask for it)."""
+        read_mesh(self.file, f"{key}.file")                 # missing files fail here, keyed
+        read_point_cache(self.animation.file, f"{key}.animation.file")
+        versions = [(str(path.resolve()), path.stat().st_mtime_ns) for path in
+                    (Path(self.file).expanduser(), Path(self.animation.file).expanduser())]
+        return _cached_surface(*versions, float(self.animation.fps),
+                               float(self.animation.start), float(self.scale),
+                               float(self.rotation_degrees), tuple(map(float, self.rotation_axis)),
+                               tuple(map(float, self.position)), float(self.epsilon), key)
+
+    def moves(self) -> bool:
+        return self.motion is not None or self.animation is not None
+
+    def vertices_at(self, vertices, t: float) -> np.ndarray:
+        if self.animation is None:
+            return super().vertices_at(vertices, t)
+        return surface_at(self.deforming_surface(), t)   # its display mesh is the surface
 
     def mesh(self, key: str = "file") -> TriangleMesh:
         """The mesh as placed in the scene."""
@@ -174,15 +208,28 @@ class MeshTerrain(Contact):
                             self.resolution)
 
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
+        if self.animation is not None:   # at time 0, exactly (libigl)
+            import igl
+
+            surface = self.deforming_surface()
+            return igl.signed_distance(np.atleast_2d(np.asarray(x, float)),
+                                       surface_at(surface, 0.0), surface.triangles,
+                                       sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0] \
+                - radius
         return self.grid().lookup(x) - radius
 
     def pack(self, data_start: int):
+        if self.animation is not None:
+            return self.deforming_surface().block(data_start)
         grid = self.grid()
         return grid.row(data_start), grid.values
 
     def display_mesh(self, near, extent: float):
         from ..render.terrain_meshes import TerrainMesh
 
+        if self.animation is not None:
+            surface = self.deforming_surface()
+            return TerrainMesh(surface_at(surface, 0.0), surface.triangles, two_sided=True)
         mesh = self.mesh()
         return TerrainMesh(mesh.vertices, mesh.triangles, two_sided=True)
 
@@ -197,6 +244,17 @@ class MeshTerrain(Contact):
         box_low, box_high = vertices.min(axis=0), vertices.max(axis=0)
         return np.array([[x, y, z] for x in (box_low[0], box_high[0])
                          for y in (box_low[1], box_high[1]) for z in (box_low[2], box_high[2])])
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_surface(mesh_version, cache_version, fps, start, scale, rotation_degrees,
+                    rotation_axis, position, epsilon, key):
+    def place(points):
+        return placed(TriangleMesh(points, np.zeros((0, 3), np.int64)), scale, rotation_degrees,
+                      rotation_axis, position).vertices
+
+    animation = Animation(cache_version[0], fps, start)
+    return deforming_surface(mesh_version[0], animation, place, epsilon, key)
 
 
 @functools.lru_cache(maxsize=8)

@@ -49,7 +49,7 @@ class Viewer:
             self.drawing = SceneDrawing(c.sim.model, c.draw, c.sim.positions)
             self._drawn_version = c.version
         else:
-            self.drawing.update(c.sim.positions)
+            self.drawing.update(c.sim.positions, c.sim.time)
         if c.reframe:
             self.look("auto")
             c.reframe = False
