@@ -238,7 +238,7 @@ def deforming_collider(folder: Path) -> dict:
     sphere.shape_key_add(name="Basis")
     swell = sphere.shape_key_add(name="Swell")
     for point in swell.data:
-        point.co = point.co * 3.0          # radius 0.3: through the cloth at y = 0
+        point.co = point.co * 4.0          # radius 0.4: 0.1 m through the cloth at y = 0
     swell.value = 0.0
     swell.keyframe_insert("value", frame=1)
     swell.value = 1.0
@@ -248,7 +248,7 @@ def deforming_collider(folder: Path) -> dict:
     radius = {}
     for frame in frame_list:
         scene.frame_set(frame)
-        radius[frame] = 0.1 * (1 + 2 * swell.value)
+        radius[frame] = 0.1 * (1 + 3 * swell.value)
     return {"error": error, "frames": frame_list, "cloth": frames_of(cloth, frame_list),
             "centre": [0.05, -0.3, 0.95], "radius": radius,
             "exported": open(folder / "scene_springsim" / "Scene" / "scene" / "scene.toml").read()}
