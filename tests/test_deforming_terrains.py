@@ -303,7 +303,6 @@ def test_usd_export_moves_the_terrains_with_the_take(platform_files, tmp_path):
 
     folder, _, _ = platform_files
     (folder / "both.toml").write_text(CUBE.format(dt=1 / 60, integrator="implicit_euler") + """
-duration = 0.5
 [[terrains]]
 type = "mesh"
 file = "plate.obj"
@@ -317,8 +316,8 @@ radius = 0.5
 velocity = [0.0, 1.0, 0.0]
 """)
     take, usd = tmp_path / "both.npz", tmp_path / "both.usda"
-    assert main(["run", str(folder / "both.toml"), "--quiet", "--fps", "20", "--out",
-                 str(take)]) == 0
+    assert main(["run", str(folder / "both.toml"), "--quiet", "--duration", "0.5", "--fps", "20",
+                 "--out", str(take)]) == 0
     assert main(["export", "--quiet", str(take), str(usd)]) == 0
     stage = Usd.Stage.Open(str(usd))
     plate_points = UsdGeom.Mesh(stage.GetPrimAtPath("/take/terrains/terrain_0_meshterrain"))

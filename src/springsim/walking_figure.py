@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 from .export.pc2 import encode
 from .safe_files import atomic_output
 
-VERSION = 1
+VERSION = 2
 FPS = 30.0
 SECONDS = 6.0
 WALK_SPEED = 0.8            # m/s along its heading
@@ -41,8 +41,11 @@ def parts() -> list[Part]:
     import trimesh
 
     def capsule(height, radius, count, centre):
+        """An upright capsule: trimesh's lies along z; turned by -90 degrees about x (a
+        rotation, so that its faces stay wound outwards)."""
         mesh = trimesh.creation.capsule(height=height, radius=radius, count=count)
-        return np.asarray(mesh.vertices) + centre, np.asarray(mesh.faces)
+        x, y, z = np.asarray(mesh.vertices).T
+        return np.stack([x, z, -y], axis=1) + centre, np.asarray(mesh.faces)
 
     head = trimesh.creation.icosphere(subdivisions=3, radius=0.12)
     pieces = [(*capsule(0.45, 0.2, [64, 32], [0.0, 1.15, 0.0]), (0.0, 1.15, 0.0), 0.0, 0.0),
