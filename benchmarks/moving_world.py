@@ -7,8 +7,8 @@
    turning slowly about its centre (motion.angular_velocity) or standing still, rk4 steps of
    1 ms and implicit_euler steps of 1/60 s.
 2. Wind on a cloth against the same cloth in still air (limit: 15% more per step): the reference
-   cloth (25 x 25) hanging from its corners, rk4 at 1 ms and implicit_euler at 1/60 s, in a
-   6 m/s wind with gusts.
+   cloth (25 x 25) hanging from its corners, rk4 at 0.1 ms (its scenes' step) and
+   implicit_euler at 1/60 s, in a 6 m/s wind with gusts.
 3. The `cape` preset against real time (limit: faster than real time): a 2,500-particle cloth
    pinned to the shoulders of a walking figure, a mesh terrain of about 10,000 triangles that a
    point cache deforms, implicit_euler at 1/60 s; simulated seconds per wall-clock second over
@@ -78,14 +78,26 @@ def moving_mesh() -> None:
 
 
 def wind() -> None:
-    scenes = {"still air": Scene(bodies=[Cloth()]),
-              "wind": Scene(bodies=[Cloth()], wind=Wind(velocity=(6.0, 0.0, 0.0), friction=0.02,
-                                                        gusts=Gusts(0.3, 1.0, 1)))}
-    for integrator, dt, steps in (("rk4", 1e-3, 400), ("implicit_euler", 1 / 60, 30)):
-        times = step_times(scenes, integrator, dt, steps)
+    """Both cloths start every round from the same state (the windy one's after 0.3 s, blown
+    out), so that they differ by the wind's force alone, not by their shapes' contacts."""
+    gusty = Wind(velocity=(6.0, 0.0, 0.0), friction=0.02, gusts=Gusts(0.3, 1.0, 1))
+    for integrator, dt, steps in (("rk4", 1e-4, 400), ("implicit_euler", 1 / 60, 30)):
+        sims = {name: springsim.Simulation(Scene(bodies=[Cloth()], wind=air),
+                                           integrator=integrator, dt=dt)
+                for name, air in (("still air", None), ("wind", gusty))}
+        sims["wind"].advance(0.3)
+        start = sims["wind"].state.positions.copy(), sims["wind"].state.velocities.copy()
+        best = {name: np.inf for name in sims}
+        for _ in range(ROUNDS + 1):
+            for name, sim in sims.items():
+                sim.state.positions[:], sim.state.velocities[:] = start
+                began = time.perf_counter()
+                sim.step(steps)
+                best[name] = min(best[name], (time.perf_counter() - began) / steps)
         print(f"wind on the reference cloth, {integrator}: still air "
-              f"{times['still air'] * 1e3:.3f} ms, wind {times['wind'] * 1e3:.3f} ms per step: "
-              f"+{(times['wind'] / times['still air'] - 1) * 100:.1f}% (limit 15%)")
+              f"{best['still air'] * 1e3:.3f} ms, wind {best['wind'] * 1e3:.3f} ms per step "
+              f"from the same blown-out state: +{(best['wind'] / best['still air'] - 1) * 100:.1f}%"
+              f" (limit 15%)")
 
 
 def cape() -> None:

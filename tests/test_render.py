@@ -137,24 +137,3 @@ def test_video_frames_are_in_real_time_when_a_frame_is_not_a_whole_number_of_ste
     assert len(times) == 51
     assert np.all(np.abs(times - np.arange(51) / 25) <= sim.dt / 2 + 1e-12)
 
-
-def test_a_moving_terrain_is_drawn_where_its_motion_has_it(renderer):
-    """A sphere terrain keyframed from x = -1 to x = +1 m: drawn alone at t = 0 and at t = 1 s,
-    its pixels' centre is where the pinhole camera projects its centre at each time."""
-    from springsim.bodies.cube import Cube
-    from springsim.motion import Keyframe, Motion
-    from springsim.render import Camera
-    from springsim.terrains import Sphere
-
-    motion = Motion(keyframes=[Keyframe(time=0.0), Keyframe(time=1.0, position=(2.0, 0.0, 0.0))])
-    scene = springsim.Scene(bodies=[Cube(position=(0.0, 3.0, 0.0))],
-                            terrains=[Sphere(center=(-1.0, 0.0, 0.0), radius=0.5,
-                                             motion=motion)])
-    sim = springsim.Simulation(scene)
-    camera = Camera(eye=np.array([0.0, 0.5, 6.0]), target=np.zeros(3))
-    drawing = SceneDrawing(sim.model, DrawOptions.only(["terrains"]), sim.positions)
-    for t, centre in ((0.0, (-1.0, 0.0, 0.0)), (1.0, (1.0, 0.0, 0.0))):
-        mask = not_background(draw_frame(drawing, camera, sim.positions, t))
-        rows, columns = np.nonzero(mask)
-        column, row = camera.project(np.array([centre]), WIDTH, HEIGHT)[0]
-        assert abs(columns.mean() - column) < 0.02 * WIDTH and abs(rows.mean() - row) < 0.03 * HEIGHT

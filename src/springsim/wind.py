@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._jit import kernel
+from ._jit import inline_kernel, kernel
 from .errors import SceneError, is_finite, require
 
 GUST_MODES = 8
@@ -142,7 +142,7 @@ def pack_wind(wind: Wind | None) -> dict:
     return {"wind_settings": settings, "wind_keys": keys, "wind_modes": modes}
 
 
-@kernel
+@inline_kernel
 def air_velocity(model, x0, x1, x2, t):
     """The air's velocity (m/s) at a point and time: the keyed mean wind plus the gusts."""
     keys = model.wind_keys
@@ -173,7 +173,7 @@ def air_velocity(model, x0, x1, x2, t):
     return a0, a1, a2
 
 
-@kernel
+@inline_kernel
 def triangle_wind(model, x, v, a, b, c, t):
     """The wind force (N) on triangle (a, b, c), and the coefficients of its corners'
     diagonal derivative, rho C_d A |w_n| / 9 (along n) and rho C_f A |w_t| / 9 (across), with n."""
@@ -202,7 +202,7 @@ def triangle_wind(model, x, v, a, b, c, t):
             normal * w_n * n2 + along * t2, 2.0 * normal / 9.0, 2.0 * along / 9.0, n0, n1, n2)
 
 
-@kernel
+@inline_kernel
 def ball_wind(model, x, v, i, t):
     """Ball i's relative air velocity w and 1/2 rho C_d pi r^2 |w| (its force is that times w)."""
     r = model.radius[i]
