@@ -376,14 +376,12 @@ class DeformingSurface:
         return [float(data_start)], block
 
 
-def deforming_surface(file: str, animation: Animation, place, epsilon: float,
-                      key: str) -> DeformingSurface:
+def deforming_surface(file: str, animation: Animation, place, epsilon: float) -> DeformingSurface:
     """The surface of mesh ``file`` driven by ``animation`` (its vertices, in the file's order
-    and frame), placed by ``place`` ((n, 3) file points -> scene points) and welded."""
-    mesh = read_mesh_file(file, f"{key}.file")
-    animation.check_points(len(mesh.vertices), f"{key}.animation",
-                           f"the mesh file {file}")
-    cache = animation.cache(f"{key}.animation.file")
+    and frame, as many as the file has: the caller checks), placed by ``place`` ((n, 3) file
+    points -> scene points) and welded."""
+    mesh = read_mesh_file(file, "file")
+    cache = animation.cache("animation.file")
     welded = weld(mesh.vertices)
     first = first_file_vertex(welded.of_file_vertex)
     samples = np.stack([place(points[first]) for points in cache.points])

@@ -29,8 +29,9 @@ import numpy as np
 
 from .._jit import kernel
 from ..errors import SceneError, require
-from ..meshfiles import TriangleMesh, check_triangles, placed, read_mesh, validate_placement
-from ..animation import Animation, read_point_cache
+from ..meshfiles import (TriangleMesh, check_triangles, placed, read_mesh, read_mesh_file,
+                         validate_placement)
+from ..animation import Animation
 from .base import Contact, register
 from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
 
@@ -176,14 +177,17 @@ class MeshTerrain(Contact):
     def deforming_surface(self, key: str = "terrain") -> DeformingSurface:
         """The surface its animation drives, placed as the mesh is (kept per file versions and
         settings: validation, packing and drawing ask for it)."""
-        read_mesh(self.file, f"{key}.file")                 # missing files fail here, keyed
-        read_point_cache(self.animation.file, f"{key}.animation.file")
+        # what can be wrong fails here, named by ``key``; the surface is then kept whatever
+        # key asks (validation and packing ask with different ones)
+        vertices = read_mesh_file(self.file, f"{key}.file").vertices
+        self.animation.check_points(len(vertices), f"{key}.animation",
+                                    f"the mesh file {self.file}")
         versions = [(str(path.resolve()), path.stat().st_mtime_ns) for path in
                     (Path(self.file).expanduser(), Path(self.animation.file).expanduser())]
         return _cached_surface(*versions, float(self.animation.fps),
                                float(self.animation.start), float(self.scale),
                                float(self.rotation_degrees), tuple(map(float, self.rotation_axis)),
-                               tuple(map(float, self.position)), float(self.epsilon), key)
+                               tuple(map(float, self.position)), float(self.epsilon))
 
     def moves(self) -> bool:
         return self.motion is not None or self.animation is not None
@@ -248,13 +252,13 @@ class MeshTerrain(Contact):
 
 @functools.lru_cache(maxsize=8)
 def _cached_surface(mesh_version, cache_version, fps, start, scale, rotation_degrees,
-                    rotation_axis, position, epsilon, key):
+                    rotation_axis, position, epsilon):
     def place(points):
         return placed(TriangleMesh(points, np.zeros((0, 3), np.int64)), scale, rotation_degrees,
                       rotation_axis, position).vertices
 
     animation = Animation(cache_version[0], fps, start)
-    return deforming_surface(mesh_version[0], animation, place, epsilon, key)
+    return deforming_surface(mesh_version[0], animation, place, epsilon)
 
 
 @functools.lru_cache(maxsize=8)
