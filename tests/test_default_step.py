@@ -1,7 +1,8 @@
 """Defaults that work together (issue 28, item 6): a scene file that gives no dt gets the step its
 stiffest particle allows (step_size.py), and a divergence suggests a step that works.
 
-Oracles: every body kind alone, with every key at its default, runs 5 s without diverging under
+Oracles: every body kind alone (a cloth pinned along an edge and a mesh cloth among them), with
+every key at its default, runs 5 s without diverging under
 the default integrator at the chosen step and under implicit_euler at 1/60 s; the reference cloth
 pinned along an edge, which diverges at the old default 1 ms, runs at the step its divergence
 message suggests.
@@ -15,13 +16,18 @@ from springsim import Simulation, SimulationDiverged
 from springsim.scenefile import AutomaticStep, load_scene
 
 DATA = Path(__file__).with_name("data")
-KINDS = {"cube": "", "cloth": "", "balls": "",
-         "mesh": f'file = "{DATA / "animal.obj"}"\n'}
+KINDS = {   # name: the body's type and the keys it gives (every other key at its default)
+    "cube": ("cube", ""), "cloth": ("cloth", ""), "balls": ("balls", ""),
+    "mesh": ("mesh", f'file = "{DATA / "animal.obj"}"\n'),
+    "cloth pinned along an edge": ("cloth", 'pinned = "edge"\n'),
+    "mesh cloth": ("cloth", f'file = "{DATA / "uv_sphere_unwelded.obj"}"\n'),
+}
 
 
 def scene_file(tmp_path, kind: str, extra: str = "") -> Path:
-    path = tmp_path / f"{kind}.toml"
-    path.write_text(f'{extra}[[bodies]]\ntype = "{kind}"\n{KINDS[kind]}')
+    path = tmp_path / f"{kind.replace(' ', '-')}.toml"
+    body_type, keys = KINDS[kind]
+    path.write_text(f'{extra}[[bodies]]\ntype = "{body_type}"\n{keys}')
     return path
 
 

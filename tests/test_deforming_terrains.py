@@ -272,6 +272,9 @@ file = "plate.obj"
      "one of motion, follow and animation"),
     ("", '[[bodies.pins]]\nparticles = [0]\n[bodies.pins.animation]\nfile = "nine.pc2"',
      "mesh", "pins.0.animation", "a mesh body's particles are not its file's vertices"),
+    ('[terrains.animation]\nfile = "nine.pc2"',
+     '[[bodies.pins]]\nparticles = [0]\nfollow = "terrains.0"', "cloth",
+     "bodies.0.pins.0.follow", "names a deforming terrain"),
 ])
 def test_bad_caches_are_refused_in_one_line(tmp_path, terrain, pin, body, key, says):
     path = bad_scene(tmp_path, terrain, pin, body)

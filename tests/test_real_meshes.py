@@ -150,8 +150,8 @@ def test_a_tumbling_thin_limbed_body_keeps_its_surface_in_its_lattice():
 
 def test_the_run_says_the_spacing_chosen_and_warns_in_one_line(tmp_path):
     (tmp_path / "scan.toml").write_text(
-        f'duration = 0.02\n[[bodies]]\ntype = "mesh"\nfile = "{DATA / "open_scan.obj"}"\n'
-        'particles = 300\nposition = [0, 2, 0]\n')
+        'duration = 0.02\ndt = 0.0004\n[[bodies]]\ntype = "mesh"\n'   # dt given: no step said
+        f'file = "{DATA / "open_scan.obj"}"\nparticles = 300\nposition = [0, 2, 0]\n')
     result = subprocess.run([sys.executable, "-m", "springsim", "run", str(tmp_path / "scan.toml"),
                              "--out", str(tmp_path / "scan.npz")], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr

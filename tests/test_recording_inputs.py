@@ -216,4 +216,4 @@ def test_a_builtin_mesh_that_is_not_installed_is_one_line(capsys):
     assert main(["scenes", "jelly-torus", "--set", "bodies.0.file=builtin:teapot.obj"]) == 2
     assert capsys.readouterr().err == (
         "springsim scenes: bodies.0.file = 'builtin:teapot.obj': is not a mesh installed with "
-        "springsim; those are builtin:stairs.obj, builtin:torus.obj\n")
+        "springsim; those are builtin:platform.obj, builtin:stairs.obj, builtin:torus.obj\n")

@@ -137,3 +137,21 @@ def test_video_frames_are_in_real_time_when_a_frame_is_not_a_whole_number_of_ste
     assert len(times) == 51
     assert np.all(np.abs(times - np.arange(51) / 25) <= sim.dt / 2 + 1e-12)
 
+
+
+@pytest.mark.parametrize("name", [name for name in springsim.preset_names()
+                                  if springsim.load_scene(name).terrains])
+def test_every_terrain_stands_out_from_the_background(renderer, name):
+    """Lit and tone-mapped, a terrain's pixels differ from the sky in brightness by a tenth of
+    the range at least (the stairs of jelly-torus, pale grey on pale blue, barely showed)."""
+    sim = springsim.Simulation(springsim.load_scene(name))
+    x = sim.positions
+    camera = camera_path("auto", sim.model, x[None], WIDTH / HEIGHT)[0]
+    start_renderer(headless=True, width=WIDTH, height=HEIGHT)
+    picture = draw_frame(SceneDrawing(sim.model, DrawOptions.only(["terrains"]), x), camera, x)
+    sky = background()
+    terrain = np.any(picture.astype(float) != sky, axis=-1)
+    assert terrain.mean() > 0.05
+    luminance = np.array([0.2126, 0.7152, 0.0722])
+    contrast = np.abs(picture[terrain].astype(float) @ luminance - sky @ luminance)
+    assert contrast.mean() > 25.5

@@ -56,7 +56,7 @@ class Scene:
         for t, terrain in enumerate(self.terrains):
             terrain.validate(f"terrains.{t}")
         for i, body in enumerate(self.bodies):
-            check_follows(getattr(body, "pins", ()), len(self.terrains), f"bodies.{i}.pins")
+            check_follows(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
         self.validate_implicit_settings()
         if self.wind is not None:
             self.wind.validate("wind")

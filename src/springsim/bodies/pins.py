@@ -133,14 +133,20 @@ def followed_terrain(pin: Pin) -> int:
     return int(FOLLOW.fullmatch(pin.follow).group(1)) if pin.follow else -1
 
 
-def check_follows(pins, terrain_count: int, key: str) -> None:
-    """Every ``follow`` names a terrain of the scene."""
+def check_follows(pins, terrains, key: str) -> None:
+    """Every ``follow`` names a terrain of the scene that moves rigidly or stands still: a pin
+    keeps its place in the terrain's frame, and a deforming terrain has none."""
+    terrain_count = len(terrains)
     for p, pin in enumerate(pins):
         if pin.follow:
             require(followed_terrain(pin) < terrain_count, f"{key}.{p}.follow", pin.follow,
                     f"names no terrain: the scene has {terrain_count} "
                     f"(terrains.0 to terrains.{terrain_count - 1})" if terrain_count else
                     "names no terrain: the scene has none")
+            require(getattr(terrains[followed_terrain(pin)], "animation", None) is None,
+                    f"{key}.{p}.follow", pin.follow,
+                    "names a deforming terrain, which has no frame to keep a place in: give "
+                    "the pin an [animation] of the body's points instead")
 
 
 def particle_cache(count: int):

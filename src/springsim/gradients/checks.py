@@ -2,16 +2,18 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag and pins; contact with planes (contact.py, implicit_contact.py).
-Not yet covered: contact with curved terrains (spheres, bowls, meshes), body-body and ball
-contact. A terrain the adjoint does not follow may be in the
-scene as long as no particle comes within its contact band during the run; one that does is
-refused rather than given a gradient that leaves contact out.
+dampers, gravity, drag and pins that hold still; contact with still planes (contact.py,
+implicit_contact.py). Not yet covered, so refused rather than given a gradient that leaves a
+force out: wind, soft pins and pins that move, contact with curved, moving or deforming
+terrains, body-body and ball contact. A terrain the adjoint does not follow may be in the scene
+as long as no particle comes within its contact band during the run.
 """
 import numpy as np
 
 from ..errors import SceneError
 from .adjoints import ADJOINTS
+
+WIND_ON = 5   # wind.pack_wind's settings: 1.0 where the scene has a [wind] table
 
 
 def check_supported(simulation) -> None:
@@ -27,11 +29,28 @@ def check_supported(simulation) -> None:
         if self_colliding:
             raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
                              "self contact yet: set it to false")
+    check_world_still(simulation.model)
     surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
         arrays.surface_points) else []
     if len(surfaces) > 1:
         raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
                          "other, and gradients do not follow body-body contact yet")
+
+
+def check_world_still(model) -> None:
+    """Refuses the moving world's forces that the adjoint leaves out (module docstring)."""
+    arrays = model.arrays
+    if arrays.wind_settings[WIND_ON]:
+        raise SceneError("wind", "a [wind] table", "blows with a force that gradients do not "
+                         "follow yet: leave it out")
+    soft = np.flatnonzero(arrays.pin_stiffness > 0)
+    if len(soft):
+        raise SceneError("bodies.pins.stiffness", float(arrays.pin_stiffness[soft[0]]),
+                         "makes a soft pin, which gradients do not follow yet: leave it out "
+                         "for a hard pin")
+    if len(arrays.pin_particles):   # the pins that move (world.py); held ones are model.pinned
+        raise SceneError("bodies.pins", "motion, follow or animation", "moves a pin, which "
+                         "gradients do not follow yet: hold the pins still")
 
 
 def contact_check(simulation):
@@ -41,7 +60,9 @@ def contact_check(simulation):
     from ..terrains import Plane
 
     model = simulation.model
-    followed = [isinstance(terrain, Plane) for terrain in model.terrains]
+    still = (model.arrays.terrain_motion < 0) & (model.arrays.terrain_deforming < 0)
+    followed = [isinstance(terrain, Plane) and still[t]
+                for t, terrain in enumerate(model.terrains)]
     if all(followed):
         return None
     radii = model.arrays.terrain_offset
@@ -59,7 +80,7 @@ def contact_check(simulation):
                 raise SceneError(f"terrains.{t}", type(terrain).__name__,
                                  f"is touched at step {step} (particle "
                                  f"{int(np.argmax(touching))}): gradients follow contact with "
-                                 "planes only")
+                                 "still planes only")
     return check
 
 

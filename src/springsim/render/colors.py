@@ -11,8 +11,9 @@ BODY_COLORS = ((0.95, 0.55, 0.2), (0.25, 0.55, 0.95), (0.9, 0.35, 0.55), (0.55, 
 CLOTH_BACK_COLOR = (0.35, 0.6, 0.85)        # the underside of an open surface (cloth)
 PARTICLE_COLOR = (0.15, 0.15, 0.2)
 BALL_COLOR = (0.6, 0.62, 0.7)
-TERRAIN_COLOR = (0.72, 0.74, 0.7)
-TERRAIN_CHECKER_COLORS = ((0.78, 0.8, 0.76), (0.62, 0.64, 0.6))
+# terrains darker than the pale sky, so that every face of stairs or a slope shows
+TERRAIN_COLOR = (0.5, 0.5, 0.47)
+TERRAIN_CHECKER_COLORS = ((0.7, 0.72, 0.68), (0.56, 0.58, 0.54))
 BOWL_COLOR = (0.55, 0.68, 0.78)
 CONTACT_COLOR = (0.85, 0.1, 0.1)             # body-body contact points
 CONTACT_NORMAL_COLOR = (0.1, 0.1, 0.1)       # and their normals

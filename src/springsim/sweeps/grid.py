@@ -15,12 +15,14 @@ the same for the same seed on any machine.
 import hashlib
 import itertools
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import require
-from ..scenefile import apply_override, load_scene, parse_value, scene_to_toml, toml_value
+from ..scenefile import (AutomaticStep, apply_override, load_scene, parse_value, scene_to_toml,
+                         toml_value)
 
 SEED_AMPLITUDE = 0.01   # share of the shortest rest length by which a seed moves a particle
 MAX_RUNS = 100_000      # a grid larger than this is refused (it is most likely a typo)
@@ -89,7 +91,9 @@ def build_grid(scene: str, variations, *, overrides=(), seeds: int | None = None
     require(total <= MAX_RUNS, "--vary", " ".join(f"{key}=({len(v.values)} values)"
                                                   for key, v in zip(keys, variations)),
             f"makes {total} runs; a sweep may have at most {MAX_RUNS}")
-    base = load_scene(scene, overrides)
+    with warnings.catch_warnings(record=True) as said:   # said after the grid is known good
+        warnings.simplefilter("always")
+        base = load_scene(scene, overrides)
     specs = []
     for combination in itertools.product(*(variation.values for variation in variations)):
         settings = tuple(zip(keys, combination))
@@ -100,6 +104,10 @@ def build_grid(scene: str, variations, *, overrides=(), seeds: int | None = None
         for seed in seed_values:
             specs.append(RunSpec(index=len(specs), settings=settings, seed=seed, scene=varied,
                                  fps=float(fps), save=save, run_id=run_id(varied, seed, fps)))
+    for warning in said:
+        if not (issubclass(warning.category, AutomaticStep) and "dt" in keys):
+            warnings.warn_explicit(warning.message, warning.category, warning.filename,
+                                   warning.lineno)
     return specs
 
 
