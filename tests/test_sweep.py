@@ -245,3 +245,17 @@ def test_a_worker_that_dies_once_is_retried_and_one_that_always_dies_is_reported
     assert [outcomes[i].value for i in (0, 1, 3)] == ["a", "once", "b"]
     assert marker.exists()
     assert isinstance(outcomes[2].error, WorkerLost)
+
+
+def test_the_moving_worlds_keys_vary_like_any_other():
+    """Wind and motion keys take part in a grid: each run's scene has its own values."""
+    key = "terrains.1.motion.keyframes.1"
+    specs = build_grid("cloth-sweep", [parse_variation(f"{key}.time=0.5,1"),
+                                       parse_variation(f"{key}.position.2=2,3")])
+    seen = {(spec.scene.terrains[1].motion.keyframes[1].time,
+             spec.scene.terrains[1].motion.keyframes[1].position[2]) for spec in specs}
+    assert seen == {(0.5, 2.0), (0.5, 3.0), (1.0, 2.0), (1.0, 3.0)}
+    flag = build_grid("flag", [parse_variation("wind.velocity.0=2,6"),
+                               parse_variation("wind.gusts.strength=0,0.5")])
+    assert {(spec.scene.wind.velocity[0], spec.scene.wind.gusts.strength) for spec in flag} == {
+        (2.0, 0.0), (2.0, 0.5), (6.0, 0.0), (6.0, 0.5)}
