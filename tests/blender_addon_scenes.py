@@ -554,6 +554,15 @@ def interface(folder: Path) -> dict:
     settings.use_frame_range = settings.use_air = False
     settings.last_message = ""
     panels["preferences"] = drawn(Preferences, self={"bl_rna": Preferences.bl_rna})
+
+    class Wrong:                     # the stand-in must refuse what the real layout refuses
+        def draw(self, context):
+            settings = context.scene.springsim
+            self.layout.prop(settings, "no_such_setting")
+            self.layout.prop(settings, "gravity", txt="typo")
+            self.layout.operator("springsim.no_such_operator")
+            self.layout.row().operator("springsim.free", icon="NO_SUCH_ICON")
+    panels["wrong"] = drawn(Wrong, scene=scene)
     result["panels"] = panels
     result["poll"] = {name: bool(PHYSICS_PT_springsim.poll(SimpleContext(obj)))
                       for name, obj in (("mesh", plain), ("empty", empty), ("nothing", None))}
@@ -579,7 +588,7 @@ def interface(folder: Path) -> dict:
         out = folder / f"preset_{name}"
         bpy.ops.springsim.export_scene(filepath=str(out))
         table = tomllib.loads((out / "scene.toml").read_text())
-        kinds = {body["type"]: body for body in table["bodies"]}
+        kinds = {entry["type"]: entry for entry in table["bodies"]}
         exported[name] = kinds["cloth"]["material"]
         exported[body_preset] = {kind: kinds["mesh"][kind] for kind in
                                  ("structural", "shear", "bend")}

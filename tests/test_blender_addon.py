@@ -5,12 +5,15 @@ subprocess so that Blender's state never leaks into other tests), loads the exte
 import + register(), presses Simulate and reads back what Blender shows: every vertex in world
 space through the Mesh Cache modifier. Oracles: springsim itself (`springsim run` of the exported
 scene folder gives the same positions), the animation Blender evaluates (pins on it), geometry (no
-vertex inside the collider), the direction and order of the wind's push, and the file's own vertex
-count and order.
+vertex inside the collider, wherever Blender's parents, armatures and modifiers put it), the
+direction and order of the wind's push, the file's own vertex count and order, the docs' preset
+table, and Blender's own RNA for what the panels draw (a stand-in layout checks every call as
+the real UILayout would; bpy in background mode draws no panel).
 """
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -32,8 +35,8 @@ if importlib.util.find_spec("bpy") is None:
                 allow_module_level=True)
 
 
-def in_blender(scenario: str, folder: Path) -> dict:
-    environment = {**os.environ,
+def in_blender(scenario: str, folder: Path, **variables) -> dict:
+    environment = {**os.environ, **variables,
                    "PYTHONPATH": os.pathsep.join(filter(None, [str(SOURCE),
                                                                os.environ.get("PYTHONPATH")]))}
     environment.pop("SPRINGSIM_PYTHON", None)
@@ -49,6 +52,12 @@ def z_up(points) -> np.ndarray:
     """springsim's Y-up coordinates in Blender's Z-up world."""
     points = np.asarray(points, float)
     return np.stack([points[..., 0], -points[..., 2], points[..., 1]], axis=-1)
+
+
+def y_up(points) -> np.ndarray:
+    """Blender's Z-up coordinates in springsim's Y-up world."""
+    points = np.asarray(points, float)
+    return np.stack([points[..., 0], points[..., 2], -points[..., 1]], axis=-1)
 
 
 def read_pc2(path) -> np.ndarray:
@@ -229,3 +238,236 @@ def test_the_addon_zip_installs_in_blender_and_finds_springsim(tmp_path):
         assert archive.read("springsim_python.txt").decode().strip() == \
             os.path.abspath(sys.executable)
         assert "blender_manifest.toml" in archive.namelist()
+
+
+
+# --- colliders moved by parents, armatures and modifiers --------------------------------------
+
+@pytest.fixture(scope="module")
+def animated_colliders(tmp_path_factory) -> dict:
+    return in_blender("animated_colliders", tmp_path_factory.mktemp("colliders"))
+
+
+def sphere_frames(result, name) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A sphere's centre (F, 3), radius (F,) and vertices (F, V, 3) as Blender evaluated them."""
+    sphere, frames = result["spheres"][name], result["frames"]
+    return (np.array([sphere["centre"][str(f)] for f in frames]),
+            np.array([sphere["radius"][str(f)] for f in frames]),
+            np.array([sphere["vertices"][str(f)] for f in frames]))
+
+
+def read_obj_vertices(path) -> np.ndarray:
+    return np.array([[float(v) for v in line.split()[1:4]]
+                     for line in Path(path).read_text().splitlines() if line.startswith("v ")])
+
+
+def keyframed(vertices: np.ndarray, motion: dict, key: dict) -> np.ndarray:
+    """springsim's rigid motion at one keyframe: pivot + position + R (x - pivot)."""
+    pivot = np.asarray(motion["pivot"])
+    axis = np.asarray(key["rotation_axis"], float)
+    axis /= np.linalg.norm(axis)
+    angle = np.radians(key["rotation_degrees"])
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    rotation = np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+    return pivot + np.asarray(key["position"]) + (vertices - pivot) @ rotation.T
+
+
+def test_colliders_moved_by_a_parent_an_armature_or_a_modifier_export_as_blender_shows_them(
+        animated_colliders):
+    import tomllib
+
+    result = animated_colliders
+    assert result["error"] == ""
+    folder = Path(result["exported"])
+    scene = tomllib.loads((folder / "scene.toml").read_text())
+    terrains = {Path(t["file"]).stem: t for t in scene["terrains"]}
+    assert set(terrains) == {"Carried", "Rigged", "Displaced"}
+    # a parent moves the sphere rigidly: keyframes; an armature or a modifier deforms the
+    # mesh: a point cache of its evaluated vertices
+    assert "motion" in terrains["Carried"] and "animation" not in terrains["Carried"]
+    for name in ("Rigged", "Displaced"):
+        assert "animation" in terrains[name] and "motion" not in terrains[name]
+    frames = result["frames"]
+    for name in ("Carried", "Rigged", "Displaced"):
+        centre, radius, vertices = sphere_frames(result, name)
+        assert centre[-1, 1] - centre[0, 1] > 0.5, name          # Blender moved it through
+        if name == "Carried":
+            motion = terrains[name]["motion"]
+            rest = read_obj_vertices(folder / terrains[name]["file"])
+            assert len(motion["keyframes"]) == len(frames)
+            exported = np.array([keyframed(rest, motion, key) for key in motion["keyframes"]])
+        else:
+            exported = read_pc2(folder / terrains[name]["animation"]["file"])
+        assert exported.shape == vertices.shape, name
+        assert np.abs(exported - y_up(vertices)).max() <= ON_PATH, name
+    carried, _, _ = sphere_frames(result, "Carried")
+    assert abs(carried[-1, 0] - carried[0, 0]) > 0.05            # the parent's turn swung it
+    _, rigged, _ = sphere_frames(result, "Rigged")
+    assert rigged[-1] > 1.25 * rigged[0]                          # the bone grew it
+
+
+def test_colliders_moved_by_a_parent_an_armature_or_a_modifier_push_the_cloth_along(
+        animated_colliders):
+    result = animated_colliders
+    frames, pinned = result["frames"], result["pinned"]
+    cloth = np.array([result["cloth"][str(f)] for f in frames])
+    assert np.abs(cloth[:, pinned] - cloth[0, pinned]).max() <= ON_PATH
+    for name in ("Carried", "Rigged", "Displaced"):
+        centre, radius, _ = sphere_frames(result, name)
+        inscribed = radius * np.cos(np.pi / 16)      # the faces' least distance from the centre
+        gap = np.array([np.linalg.norm(cloth[k] - centre[k], axis=1).min() - inscribed[k]
+                        for k in range(len(frames))])
+        assert gap.min() >= -2e-3, (name, int(gap.argmin()) + 1)    # never inside it
+        assert gap[0] > 0.1 and gap.min() < 0.01, name      # it starts clear, then meets it
+        # and carries it along: the cloth nearest it stays in front of it all the way (y up
+        # from the cloth's rest at y = 0 to past 0.25 m)
+        ahead = [cloth[k, np.linalg.norm(cloth[k] - centre[k], axis=1).argmin(), 1] - centre[k, 1]
+                 for k in range(len(frames))]
+        assert min(ahead) > 0.5 * radius.min(), name
+        assert cloth[-1, :, 1].max() > centre[-1, 1] + radius[-1] > 0.25, name
+
+
+# --- Turbulence ---------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def turbulence(tmp_path_factory) -> tuple[dict, Path]:
+    folder = tmp_path_factory.mktemp("turbulence")
+    return in_blender("turbulence", folder), folder
+
+
+def test_a_turbulence_field_becomes_the_winds_gusts(turbulence):
+    import tomllib
+
+    result, _ = turbulence
+    wind = {name: tomllib.loads(Path(path).read_text())["wind"]
+            for name, path in result["exports"].items()}
+    # Wind 4 m/s along Blender's +y (springsim's -z); Turbulence strength 3, size 0.4, seed 7
+    assert wind["gusty"]["velocity"] == pytest.approx([0.0, 0.0, -4.0], abs=1e-6)
+    assert wind["gusty"]["gusts"] == {"strength": 0.75, "length": 0.4, "seed": 7}
+    # Size 0 (Blender's default) is Blender's unscaled noise, features about 1 m
+    assert wind["default_size"]["gusts"] == {"strength": 0.75, "length": 1.0, "seed": 7}
+    # in still air the strength is m/s, not a share of the wind's speed
+    assert wind["still"]["velocity"] == [0.0, 0.0, 0.0]
+    assert wind["still"]["gusts"] == {"strength": 3.0, "length": 0.4, "seed": 7}
+
+
+def test_turbulence_moves_a_hanging_cloth_otherwise_than_the_wind_alone_and_alike_each_run(
+        turbulence):
+    result, folder = turbulence
+    assert result["error"] == ["", "", ""]
+    steady, gusty, again = (np.array(list(result[name].values()))
+                            for name in ("steady", "gusty", "again"))
+    assert np.array_equal(gusty, again)                    # deterministic: seeded gusts
+    assert np.array_equal(gusty[0], steady[0])             # the same start...
+    assert np.abs(gusty[-1] - steady[-1]).max() > 0.02     # ...another motion
+    assert gusty[-1, :, 1].mean() > 0.1                    # the wind still blows it along +y
+    # and the gusts are springsim's own: the exported folder on the command line gives the same
+    take = folder / "gusty" / "take.pc2"
+    assert main(["run", str(folder / "gusty" / "scene.toml"), "--fps", "24.0", "--quiet",
+                 "--export", str(take)]) == 0
+    assert np.abs(z_up(read_pc2(take)) - gusty).max() <= SAME
+
+
+# --- panels, presets, an unsaved file's take, Blender's modules ---------------------------------
+
+@pytest.fixture(scope="module")
+def interface(tmp_path_factory) -> tuple[dict, Path]:
+    folder = tmp_path_factory.mktemp("interface")
+    temporary = folder / "tmp"
+    temporary.mkdir()
+    return in_blender("interface", folder, TMPDIR=str(temporary)), temporary
+
+
+def shown(panel: dict) -> set:
+    assert panel["problems"] == []
+    return {item[1] for item in panel["items"] if item[0] in ("prop", "prop_search", "operator")}
+
+
+def test_each_panel_shows_its_roles_settings_and_buttons(interface):
+    panels = interface[0]["panels"]
+    buttons = {"springsim.simulate", "springsim.free"}
+    material = {"preset", "thickness", "friction"}
+    cloth = {"density", "stretch", "shear", "bend", "stretch_damping", "shear_damping",
+             "bend_damping", "pin_group"}
+    pins = {"pin_stiffness", "pin_damping"}
+    body = {"particles", "particle_mass", "spring_ks", "spring_kd"}
+    collider = {"restitution", "resolution"}
+    assert shown(panels["cloth"]) == {"role"} | material | cloth | pins | buttons
+    assert ["prop_search", "pin_group", "ObjectSettings", "vertex_groups"] in \
+        panels["cloth"]["items"]                   # chosen among the object's vertex groups
+    assert shown(panels["cloth_unpinned"]) == {"role"} | material | cloth | buttons
+    assert shown(panels["body"]) == {"role"} | material | body | buttons
+    assert shown(panels["collider"]) == {"role", "friction"} | collider | buttons
+    assert shown(panels["none"]) == {"role"}
+    run = {"integrator", "substeps", "use_frame_range", "gravity", "self_collision", "use_air",
+           "springsim.export_scene"} | buttons
+    assert shown(panels["scene"]) == run
+    assert shown(panels["scene_all"]) == run | {"frame_start", "frame_end", "air_density",
+                                                "air_drag"}
+    assert ["label", "springsim: simulated 6 frames"] in panels["scene_all"]["items"]
+    assert shown(panels["preferences"]) == {"python_path"}
+    assert interface[0]["poll"] == {"mesh": True, "empty": False, "nothing": False}
+    # the stand-in layout refuses what Blender's would: a wrong property, keyword, operator, icon
+    assert len(panels["wrong"]["problems"]) == 4, panels["wrong"]["problems"]
+
+
+def load_presets():
+    spec = importlib.util.spec_from_file_location("_presets", SOURCE / "springsim_blender" /
+                                                  "presets.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def documented_presets() -> dict:
+    """The numbers of the preset tables in docs/tutorials/blender.md, by preset name."""
+    text = (HERE.parent / "docs" / "tutorials" / "blender.md").read_text()
+    section = text.split("### Presets", 1)[1].split("\n## ", 1)[0]
+    rows = {}
+    for line in section.splitlines():
+        row = re.match(r"^\| \*\*(\w+)\*\*[^|]*\|(.*)\|$", line)
+        if row:
+            rows[row.group(1).upper()] = [float(cell) for cell in row.group(2).split("|")]
+    return rows
+
+
+def test_each_preset_sets_the_documented_numbers(interface):
+    result = interface[0]
+    presets = load_presets()
+    assert set(presets.CLOTH) | set(presets.BODY) == {"SILK", "COTTON", "DENIM", "LEATHER",
+                                                      "RUBBER", "JELLY"}
+    documented = documented_presets()
+    assert documented == {**{name: list(values) for name, values in presets.CLOTH.items()},
+                          **{name: list(values) for name, values in presets.BODY.items()}}
+    for name, values in presets.CLOTH.items():
+        applied = result["applied"][name]         # Blender keeps float32
+        assert [applied[key] for key in presets.CLOTH_KEYS] == \
+            [float(np.float32(v)) for v in values], name
+        assert result["exported"][name] == dict(zip(presets.CLOTH_KEYS, values)), name
+    for name, (ks, kd) in presets.BODY.items():
+        applied = result["applied"][name]
+        assert (applied["spring_ks"], applied["spring_kd"]) == (ks, kd), name
+        assert result["exported"][name] == {kind: {"ks": ks, "kd": kd}
+                                            for kind in ("structural", "shear", "bend")}, name
+
+
+def test_an_unsaved_files_take_goes_to_the_temporary_folder_and_free_removes_it(interface):
+    result, temporary = interface
+    assert result["blend"] == "" and result["error"] == ""
+    assert result["tempdir"] == str(temporary)
+    folder = f"springsim_{result['pid']}"
+    assert result["modifier_path"] == str(temporary / folder / "Scene" / "Cloth.pc2")
+    assert result["cache_header"][4:8:3] == [400, 6]            # 400 vertices, 6 frames
+    assert [name for name in result["temp_listing"] if "springsim" in name] == [folder]
+    assert result["after_free"]["modifiers"] == []
+    assert result["after_free"]["cache_exists"] is False
+    assert [name for name in result["after_free"]["temp_listing"] if "springsim" in name] == []
+
+
+def test_simulate_never_imports_springsim_numba_or_scipy_into_blender(interface):
+    result = interface[0]
+    assert result["findable"]             # springsim could be imported there: it was not
+    assert result["error"] == ""
+    for modules in (result["before"], result["after"], result["after_free_modules"]):
+        assert "springsim_blender.runner" in modules
+        assert [name for name in modules if not name.startswith("springsim_blender")] == []

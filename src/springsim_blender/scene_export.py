@@ -427,7 +427,7 @@ def wind_table(scene, settings) -> dict | None:
             direction = np.array(obj.matrix_world, float)[:3, 2]
             velocity += field.strength * direction / np.linalg.norm(direction)
         elif field.type == "TURBULENCE" and gusts is None:
-            gusts = {"strength": float(abs(field.strength)), "length": float(max(field.size, 1e-3)),
+            gusts = {"strength": abs(setting(field.strength)), "length": gust_length(field),
                      "seed": int(field.seed) if hasattr(field, "seed") else 0}
     if not settings.use_air and not np.any(velocity) and gusts is None:
         return None
@@ -439,3 +439,11 @@ def wind_table(scene, settings) -> dict | None:
             gusts["strength"] /= speed           # a share of the mean wind speed
         wind["gusts"] = gusts
     return wind
+
+
+def gust_length(field) -> float:
+    """A Turbulence field's Size as the gusts' length (m). Blender scales its noise by 1/Size
+    only when Size is not 0 (its default): Size 0 is the unscaled noise, whose features are about
+    1 m, not gusts of no size."""
+    size = setting(field.size)
+    return size if size > 0 else 1.0
