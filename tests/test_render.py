@@ -155,3 +155,31 @@ def test_every_terrain_stands_out_from_the_background(renderer, name):
     luminance = np.array([0.2126, 0.7152, 0.0722])
     contrast = np.abs(picture[terrain].astype(float) @ luminance - sky @ luminance)
     assert contrast.mean() > 25.5
+
+
+def test_pins_and_the_wind_are_drawn_where_they_are(renderer):
+    """The flag's pins are dots where the camera projects its pinned particles, and the wind is
+    an arrow that runs from above the bodies the way the air moves (+x), as projected."""
+    from springsim.render.drawing import pinned_particles
+
+    sim = springsim.Simulation(springsim.load_scene("flag"))
+    x = sim.positions
+    camera = camera_path("auto", sim.model, x[None], WIDTH / HEIGHT)[0]
+    start_renderer(headless=True, width=WIDTH, height=HEIGHT)
+    pins = not_background(draw_frame(SceneDrawing(sim.model, DrawOptions.only(["pins"]), x),
+                                     camera, x))
+    held = camera.project(x[pinned_particles(sim.model)], WIDTH, HEIGHT)
+    pixels = np.argwhere(pins)[:, ::-1]   # (column, row)
+    apart = np.linalg.norm(pixels[:, None, :] - held[None, :, :], axis=-1)
+    assert len(pixels) and apart.min(axis=1).max() < 8 and apart.min(axis=0).max() < 8
+
+    drawing = SceneDrawing(sim.model, DrawOptions.only(["wind"]), x)
+    arrow = not_background(draw_frame(drawing, camera, x))
+    base, tip = camera.project(np.array([drawing.wind.base, drawing.wind.base + drawing.wind.arrow]),
+                               WIDTH, HEIGHT)
+    along = (tip - base) / np.linalg.norm(tip - base)
+    pixels = np.argwhere(arrow)[:, ::-1] - base
+    assert len(pixels) > 20
+    spread = np.linalg.svd(pixels - pixels.mean(axis=0), full_matrices=False)[2][0]
+    assert abs(spread @ along) > 0.95                        # the arrow lies along the wind
+    assert (pixels @ along).mean() > 0.25 * np.linalg.norm(tip - base)   # and points its way

@@ -190,7 +190,7 @@ def run_panel_sections(viewer) -> None:
     def sections():
         psim.Begin("sections under test")
         viewer.panel._body_contact()
-        draw_toggles(c.draw, c.sim.model.spring_kind, viewer.set_drawn, contacts=True)
+        draw_toggles(c.draw, c.sim.model, viewer.set_drawn, contacts=True)
         psim.End()
 
     ps.set_user_callback(sections)

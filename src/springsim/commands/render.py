@@ -10,7 +10,7 @@ HELP = ("simulate a scene, or read a recording (the NPZ of `springsim run`), and
         "(the viewer's drawing, polyscope on EGL)")
 DEFAULT_FPS = 30.0
 DRAWABLE = ("surfaces", "particles", "structural", "shear", "bend", "face", "balls", "terrains",
-            "contacts")
+            "pins", "wind", "contacts")
 
 
 def add_arguments(parser) -> None:
@@ -28,9 +28,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--camera", default="auto",
                         help="auto (frames the bodies' whole motion and the terrain near them), "
                              "front, side, top, or follow (moves with the bodies)")
-    parser.add_argument("--draw", default="surfaces,balls,terrains",
+    parser.add_argument("--draw", default="surfaces,balls,terrains,pins,wind",
                         help="comma-separated parts to draw, among " + ", ".join(DRAWABLE)
-                             + " (default: surfaces,balls,terrains)")
+                             + " (default: surfaces,balls,terrains,pins,wind)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars and no summary")
 
 

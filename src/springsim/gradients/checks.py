@@ -11,9 +11,8 @@ as long as no particle comes within its contact band during the run.
 import numpy as np
 
 from ..errors import SceneError
+from ..wind import ON as WIND_ON
 from .adjoints import ADJOINTS
-
-WIND_ON = 5   # wind.pack_wind's settings: 1.0 where the scene has a [wind] table
 
 
 def check_supported(simulation) -> None:

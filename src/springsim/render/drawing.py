@@ -2,7 +2,8 @@
 
 Particles as small spheres, springs as thin curve networks (one per kind, in the course colours),
 body surfaces with smooth normals (open ones such as cloth in a second colour underneath), balls
-as spheres of their contact radius, the terrains, and (off by default) the body-body surface
+as spheres of their contact radius, the terrains, the pinned particles as larger dark dots, the
+mean wind's direction as an arrow above the bodies, and (off by default) the body-body surface
 contacts of the state as points with short normals (contacts.py finds them). ``update(positions)``
 moves everything to a new state; ``DrawOptions`` says what is shown.
 """
@@ -14,6 +15,7 @@ import polyscope as ps
 from ..errors import require
 from ..springs import SpringKind
 from ..surfaces import body_surface
+from ..wind import ON as WIND_ON
 from . import colors
 from .contacts import contact_marks, has_body_contact
 
@@ -30,6 +32,8 @@ class DrawOptions:
     face: bool = False
     balls: bool = True
     terrains: bool = True
+    pins: bool = True
+    wind: bool = True
     contacts: bool = False
 
     @classmethod
@@ -63,6 +67,8 @@ class SceneDrawing:
         self._add_springs()
         self._add_particles_and_balls()
         self._add_terrains()
+        self._add_pins()
+        self._add_wind()
         self._add_contacts()
         self.apply_options()
 
@@ -129,6 +135,20 @@ class SceneDrawing:
             self.parts.append(_Part(drawn.mesh, "terrains", follow))
             drawn.part = self.parts[-1]
 
+    def _add_pins(self) -> None:
+        held = np.flatnonzero(pinned_particles(self.model))
+        if held.size == 0:
+            return
+        cloud = ps.register_point_cloud("pins", self.positions[held], color=colors.PIN_COLOR)
+        cloud.set_radius(0.25 * self.spacing, relative=False)
+        self.parts.append(_Part(cloud, "pins",
+                                lambda x, c=cloud, i=held: c.update_point_positions(x[i])))
+
+    def _add_wind(self) -> None:
+        self.wind = _WindDrawing(self.model, self.positions) if has_wind(self.model) else None
+        if self.wind is not None:
+            self.parts.append(_Part(self.wind.cloud, "wind"))
+
     def _add_contacts(self) -> None:
         if not has_body_contact(self.model):
             return
@@ -147,6 +167,8 @@ class SceneDrawing:
         if time is not None:
             for drawn in self.moving_terrains:
                 drawn.at_time(time)
+            if self.wind is not None:
+                self.wind.at_time(time)
         for part in self.parts:
             if part.follow is None:
                 continue
@@ -247,6 +269,47 @@ class _ContactDrawing:
 
     def get_name(self) -> str:
         return self.POINTS
+
+
+class _WindDrawing:
+    """An arrow along the mean wind (its keyed velocity; the gusts left out), centred on the top
+    of the bodies at the start (where the camera frames them), a third of their size long
+    whatever the speed: it shows the way the air moves; the speed is in the scene."""
+
+    def __init__(self, model, positions):
+        low, high = positions.min(axis=0), positions.max(axis=0)
+        self.length = max(float(np.max(high - low)), 0.1) / 3
+        self.centre = np.array([(low[0] + high[0]) / 2, high[1], (low[2] + high[2]) / 2])
+        self.keys = model.arrays.wind_keys
+        self.cloud = ps.register_point_cloud("wind", self.centre[None], color=colors.WIND_COLOR)
+        self.cloud.set_radius(0.02 * self.length, relative=False)
+        self.at_time(0.0)
+
+    def at_time(self, t: float) -> None:
+        velocity = mean_wind(self.keys, t)
+        speed = float(np.linalg.norm(velocity))
+        self.arrow = velocity / speed * self.length if speed > 0 else np.zeros(3)
+        self.base = self.centre - self.arrow / 2
+        self.cloud.update_point_positions(self.base[None])
+        self.cloud.add_vector_quantity("air", self.arrow[None], enabled=True, vectortype="ambient",
+                                       radius=0.05 * self.length, color=colors.WIND_COLOR)
+
+
+def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
+    """The keyed wind velocity (m/s) at time t, as wind.air_velocity has it before the gusts:
+    linear between keys, held before the first and after the last."""
+    return np.array([np.interp(t, keys[:, 0], keys[:, 1 + axis]) for axis in range(3)])
+
+
+def pinned_particles(model) -> np.ndarray:
+    """Every particle a pin holds or moves: the held ones and the moving or soft ones."""
+    mask = np.array(model.pinned, bool)
+    mask[model.arrays.pin_particles] = True
+    return mask
+
+
+def has_wind(model) -> bool:
+    return bool(model.arrays.wind_settings[WIND_ON])
 
 
 def typical_spacing(model) -> float:

@@ -85,7 +85,7 @@ class ReplayViewer:
                   f"{t.frame_count}")
         self._energy_plot()
         if psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
-            draw_toggles(self.draw, self.model.spring_kind, self.set_drawn)
+            draw_toggles(self.draw, self.model, self.set_drawn)
         for number, name in enumerate(("auto", "front", "side", "top")):
             if number:
                 psim.SameLine()

@@ -9,6 +9,7 @@ import polyscope.imgui as psim
 from ..integrators import integrator_names
 from ..presets import preset_names
 from ..render.contacts import has_body_contact
+from ..render.drawing import has_wind, pinned_particles
 from ..springs import SpringKind
 from .controls import TERRAINS
 
@@ -153,7 +154,7 @@ class Panel:
     def _drawing(self) -> None:
         if psim.CollapsingHeader("Draw", psim.ImGuiTreeNodeFlags_DefaultOpen):
             model = self.controls.sim.model
-            draw_toggles(self.controls.draw, model.spring_kind, self.viewer.set_drawn,
+            draw_toggles(self.controls.draw, model, self.viewer.set_drawn,
                          contacts=has_body_contact(model))
 
     def _view_and_mouse(self) -> None:
@@ -220,13 +221,15 @@ class Panel:
             self._pending.pop(label, None)
 
 
-def draw_toggles(draw, spring_kinds, set_drawn, contacts: bool = False) -> None:
+def draw_toggles(draw, model, set_drawn, contacts: bool = False) -> None:
     """A checkbox per part the model has (``draw``: render.DrawOptions); ``set_drawn(name, shown)``
     applies a change; ``contacts``: whether the model has surfaces that touch. Shared by the
     viewer and the replay (springsim play)."""
-    present = {SpringKind(k).label for k in set(spring_kinds.tolist())}
+    present = {SpringKind(k).label for k in set(model.spring_kind.tolist())}
     toggles = ["particles", *[k.label for k in SpringKind if k.label in present],
-               "surfaces", "balls", "terrains", *(["contacts"] if contacts else [])]
+               "surfaces", "balls", "terrains",
+               *(["pins"] if pinned_particles(model).any() else []),
+               *(["wind"] if has_wind(model) else []), *(["contacts"] if contacts else [])]
     for number, name in enumerate(toggles):
         if number % 3:
             psim.SameLine()
