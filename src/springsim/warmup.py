@@ -16,8 +16,8 @@ import threading
 import time
 from pathlib import Path
 
-NOTICE = ("springsim: compiling the {integrator} kernels once (about 2 minutes; later runs "
-          "start in seconds)")
+NOTICE = ("springsim: compiling the {integrator} kernels once (minutes: up to 20 on two "
+          "cores; later runs start in seconds)")
 SPIN_EVERY = 0.1   # s between spinner frames
 SPINNER = "|/-\\"
 
