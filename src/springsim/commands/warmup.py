@@ -44,5 +44,5 @@ def warm(integrators, say=print) -> list:
                 simulation.step(1)
                 simulation.energy()
         timings.append((integrator, time.perf_counter() - started))
-        say(f"  {integrator:<18}{timings[-1][1]:.1f} s")
+        say(f"  {integrator:<20}{timings[-1][1]:.1f} s")
     return timings
