@@ -302,14 +302,17 @@ def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
 
 
 def pinned_particles(model) -> np.ndarray:
-    """Every particle a pin holds or moves: the held ones and the moving or soft ones."""
-    mask = np.array(model.pinned, bool)
-    mask[model.arrays.pin_particles] = True
+    """Every particle a pin holds or moves: the held ones and the moving or soft ones (none for
+    a recording's model, replay.recorded_model, which keeps no pins)."""
+    mask = np.array(getattr(model, "pinned", np.zeros(model.particle_count, bool)), bool)
+    mask[getattr(model.arrays, "pin_particles", np.zeros(0, np.int64))] = True
     return mask
 
 
 def has_wind(model) -> bool:
-    return bool(model.arrays.wind_settings[WIND_ON])
+    """Whether the model has a [wind] table (a recording's model keeps none)."""
+    settings = getattr(model.arrays, "wind_settings", None)
+    return settings is not None and bool(settings[WIND_ON])
 
 
 def typical_spacing(model) -> float:
