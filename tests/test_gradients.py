@@ -155,7 +155,7 @@ def test_nan_loss_and_untouched_terrain():
     assert np.isfinite(grads["drag"])
     from springsim.terrains.sphere import Sphere
     scene.terrains = [Sphere(center=(0.0, -1.52, 0.0), radius=3.0)]  # reached within 0.1 s
-    with pytest.raises(SceneError, match="contact with planes only"):
+    with pytest.raises(SceneError, match="contact with still planes only"):
         gradient(scene, weighted_squares, ["drag"], duration=0.1, integrator="rk4", dt=0.002)
 
 
