@@ -54,7 +54,7 @@ def add_loose_spring_forces(model, x, v, force):
         force[b, 2] -= fz
 
 
-@inline_kernel
+@kernel
 def accelerations(model, x, v, h, out, columns):
     """out = dv/dt at (x, v): internal and external forces over mass, then terrain contact.
 
@@ -64,6 +64,13 @@ def accelerations(model, x, v, h, out, columns):
     """
     free_accelerations(model, x, v, out, columns)
     apply_contact_forces(model, x, v, h, out)
+
+
+# accelerations as the threaded kernels inline it: a kernel's prange loops run on threads only in
+# the kernel compiled with them (integrators/_steps.threaded). The serial kernels call the one
+# compiled above instead, shared by every method and stage: inlined at every call site of the
+# explicit methods, it was compiled once per site, most of the first compile's length.
+threaded_accelerations = inline_kernel(accelerations.py_func)
 
 
 @inline_kernel

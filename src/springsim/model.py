@@ -184,13 +184,18 @@ def build_model(scene) -> Model:
                                        else radius[start:start + len(b.masses)]
                                        for b, start in zip(built, offsets)]),
         gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
-        springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length, spring_group=groups,
+        springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length,
+        spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
         clock=np.zeros(3), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
+    # Numba compiles a kernel once per layout of its arguments: one Fortran-ordered table (a
+    # cloth's triangles) compiled every kernel a second time.
+    arrays = ModelArrays(*(np.ascontiguousarray(a) if isinstance(a, np.ndarray) else a
+                           for a in arrays))
     bodies = tuple(body_slice(spec, b, i, int(offsets[i]), int(offsets[i + 1]))
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])

@@ -24,7 +24,13 @@ process, so a cached kernel with a function argument never finds its cache (it r
 run); and a kernel that calls it with a fixed function is refused caching ("uses dynamic
 globals"). Inlined into each method's own ``advance``, the step function is a constant of that
 kernel, which caches as any other.
+
+The serial ``advance`` calls the force evaluation and ``collide`` as kernels, each compiled once
+for every method; the threaded ``parallel_advance`` takes ``threaded(step)`` and
+``threaded_drive``, which inline them instead, since a kernel's loops run on threads only in the
+kernel compiled with them.
 """
+import types
 from typing import NamedTuple
 
 import numpy as np
@@ -34,7 +40,7 @@ from .._jit import inline_kernel, kernel
 from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
-from ..forces import force_columns
+from ..forces import force_columns, threaded_accelerations
 from ..world import move_world, place_pins, start_step, step_time
 
 
@@ -159,7 +165,7 @@ def is_diverged(vx, vy, vz, position):
     return not (speed_squared <= SPEED_SQUARED_LIMIT and np.abs(position) < np.inf)
 
 
-@inline_kernel
+@kernel
 def collide(model, x, v, start, pairs, h):
     """Everything contact does after the integrator's update: terrain impacts (with the
     terrains where they are at the step's end), then body-body contact (balls and surfaces in
@@ -169,3 +175,26 @@ def collide(model, x, v, start, pairs, h):
     place_pins(model, x, v)   # moving pins exactly on their paths at the step's end
     resolve_terrain_impacts(model, x, v)
     return resolve_contacts(model, x, v, start, pairs)
+
+
+# The kernels a step calls whose loops run on threads in the threaded kernel: there they must be
+# inlined (parallel_advance), while the serial kernels share one compiled copy of each.
+THREADED = {"accelerations": threaded_accelerations,
+            "collide": inline_kernel(collide.py_func)}
+
+
+def threaded(function, **twins):
+    """The inline kernel ``function`` as the threaded kernels take it: the same code, with every
+    kernel of THREADED (and ``twins``) it calls replaced by its inline twin, so that their prange
+    loops run on threads (a kernel's loops run on threads only in the kernel compiled with them).
+    Numba resolves a function's globals when it inlines it, so the twin's names are all it
+    takes."""
+    python = function.py_func
+    names = dict(python.__globals__, **THREADED, **twins)
+    twin = types.FunctionType(python.__code__, names, python.__name__, python.__defaults__,
+                              python.__closure__)
+    twin.__qualname__ = python.__qualname__ + "_threaded"
+    return inline_kernel(twin)
+
+
+threaded_drive = threaded(drive)

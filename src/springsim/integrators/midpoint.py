@@ -7,7 +7,7 @@ from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations
 from ..world import move_world, step_time
 from .base import KernelIntegrator, register
-from ._steps import add_scaled, Motion, drive, two_stage_scratch
+from ._steps import add_scaled, Motion, drive, two_stage_scratch, threaded, threaded_drive
 
 
 @inline_kernel
@@ -24,6 +24,9 @@ def midpoint_step(model, state, scratch, h, pairs):
     return pairs   # the body-body pair list: the post-step pass's to use
 
 
+threaded_midpoint_step = threaded(midpoint_step)
+
+
 @kernel
 def advance(model, x, v, h, steps, pairs):
     return drive(midpoint_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
@@ -32,7 +35,8 @@ def advance(model, x, v, h, steps, pairs):
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(midpoint_step, model, Motion(x, v), two_stage_scratch(x), h, steps, pairs)
+    return threaded_drive(threaded_midpoint_step, model, Motion(x, v), two_stage_scratch(x), h,
+                          steps, pairs)
 
 
 @register

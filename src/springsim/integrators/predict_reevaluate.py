@@ -20,7 +20,15 @@ from ..collision.response.terrain import apply_contact_forces
 from ..forces import accelerations, free_accelerations
 from ..world import move_world, step_time
 from .base import KernelIntegrator, register
-from ._steps import add_scaled, Motion, drive, two_stage_scratch
+from ._steps import add_scaled, Motion, drive, two_stage_scratch, threaded, threaded_drive
+
+
+@kernel
+def reevaluated_accelerations(model, x_p, v_p, v, h, a, columns):
+    """a at the prediction (x_p, v_p), with terrain contact stopping v, which the update
+    changes (module doc)."""
+    free_accelerations(model, x_p, v_p, a, columns)
+    apply_contact_forces(model, x_p, v, h, a)
 
 
 @inline_kernel
@@ -31,11 +39,15 @@ def predict_reevaluate_step(model, state, scratch, h, pairs):
     add_scaled(x_p, x, h, v)
     add_scaled(v_p, v, h, a)
     move_world(model, step_time(model) + h)   # moving terrains where the prediction is
-    free_accelerations(model, x_p, v_p, a, columns)
-    apply_contact_forces(model, x_p, v, h, a)   # stops v, which the update changes (module doc)
+    reevaluated_accelerations(model, x_p, v_p, v, h, a, columns)
     add_scaled(x, x, h, v_p)
     add_scaled(v, v, h, a)
     return pairs   # the body-body pair list: the post-step pass's to use
+
+
+threaded_predict_reevaluate_step = threaded(
+    predict_reevaluate_step,
+    reevaluated_accelerations=inline_kernel(reevaluated_accelerations.py_func))
 
 
 @kernel
@@ -47,8 +59,8 @@ def advance(model, x, v, h, steps, pairs):
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(predict_reevaluate_step, model, Motion(x, v), two_stage_scratch(x), h, steps,
-                 pairs)
+    return threaded_drive(threaded_predict_reevaluate_step, model, Motion(x, v),
+                          two_stage_scratch(x), h, steps, pairs)
 
 
 @register

@@ -13,7 +13,7 @@ from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
 from ..world import move_world, step_time
 from .base import KernelIntegrator, register
-from ._steps import Motion, drive
+from ._steps import Motion, drive, threaded, threaded_drive
 
 
 @inline_kernel
@@ -75,6 +75,9 @@ def rk4_scratch(x):
             np.empty_like(x), force_columns(x))
 
 
+threaded_rk4_step = threaded(rk4_step)
+
+
 @kernel
 def advance(model, x, v, h, steps, pairs):
     return drive(rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
@@ -83,7 +86,7 @@ def advance(model, x, v, h, steps, pairs):
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
+    return threaded_drive(threaded_rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
 
 
 @register

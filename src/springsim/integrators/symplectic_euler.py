@@ -2,7 +2,7 @@
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations
 from .base import KernelIntegrator, register
-from ._steps import add_scaled, Motion, drive, one_stage_scratch
+from ._steps import add_scaled, Motion, drive, one_stage_scratch, threaded, threaded_drive
 
 
 @inline_kernel
@@ -15,6 +15,9 @@ def symplectic_euler_step(model, state, scratch, h, pairs):
     return pairs   # the body-body pair list: the post-step pass's to use
 
 
+threaded_symplectic_euler_step = threaded(symplectic_euler_step)
+
+
 @kernel
 def advance(model, x, v, h, steps, pairs):
     return drive(symplectic_euler_step, model, Motion(x, v), one_stage_scratch(x), h, steps, pairs)
@@ -23,7 +26,8 @@ def advance(model, x, v, h, steps, pairs):
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return drive(symplectic_euler_step, model, Motion(x, v), one_stage_scratch(x), h, steps, pairs)
+    return threaded_drive(threaded_symplectic_euler_step, model, Motion(x, v), one_stage_scratch(x), h,
+                          steps, pairs)
 
 
 @register
