@@ -45,7 +45,7 @@ if [ ! -x .venv/bin/springsim ] || [ ! -x .venv/bin/pytest ] || [ pyproject.toml
     .venv/bin/pip install --progress-bar off -e ".[all,test]"
   touch .venv/.installed
   if [ "$first_time" = yes ]; then
-    setup_stage compiling "compiling the default integrator's kernels (springsim warmup; 10 to 20 minutes on two cores, first run only)" \
+    setup_stage compiling "compiling the default integrator's kernels (springsim warmup; about 5 minutes on two cores, first run only)" \
       .venv/bin/springsim warmup --integrators rk4
   fi
 fi

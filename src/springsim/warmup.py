@@ -16,7 +16,7 @@ import threading
 import time
 from pathlib import Path
 
-NOTICE = ("springsim: compiling the {integrator} kernels once (minutes: up to 20 on two "
+NOTICE = ("springsim: compiling the {integrator} kernels once (minutes: about 5 on two "
           "cores; later runs start in seconds)")
 SPIN_EVERY = 0.1   # s between spinner frames
 SPINNER = "|/-\\"
