@@ -37,15 +37,15 @@ from numba import prange
 import numpy as np
 
 from ..._jit import inline_kernel, kernel
-from ...terrains import terrain_distance, terrain_looks_ahead
+from ...terrains import still_terrain_distance, terrain_looks_ahead
 from ...world import surface_velocity, terrain_at, terrain_view
 
 
 BLOCK = 64   # particles whose terrain distances are looked up together (see apply_contact_forces)
 
-# STILL_LOOKUP: the per-particle loops look a still terrain up with the dispatcher directly on
-# the model's arrays, as before terrains moved; the view (world.terrain_at) is for the moving
-# ones. An inline kernel taking arrays held across the loop counts their references at every
+# STILL_LOOKUP: the per-particle loops look a still terrain up with the still dispatcher
+# (terrains/dispatch.py) directly on the model's arrays, as before terrains moved; the view
+# (world.terrain_at) is for the moving ones. An inline kernel taking arrays held across the loop counts their references at every
 # call, and that made a still plane's contact two to three times slower again
 # (benchmarks/terrain_dispatch.py).
 
@@ -79,7 +79,7 @@ def apply_contact_forces(model, x, v, h, a):
             # a still terrain looked up with the model's own arrays (STILL_LOOKUP)
             still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
             if still:
-                phi, nx, ny, nz = terrain_distance(
+                phi, nx, ny, nz = still_terrain_distance(
                     model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
                     x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
             else:
@@ -193,7 +193,7 @@ def resolve_terrain_impacts(model, x, v):
         for t in range(epsilon.shape[0]):
             still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
             if still:   # STILL_LOOKUP
-                phi, nx, ny, nz = terrain_distance(
+                phi, nx, ny, nz = still_terrain_distance(
                     model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
                     x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
             else:
