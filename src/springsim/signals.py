@@ -48,17 +48,36 @@ def on_signal(signum, frame):
     global _pending
     safe = _safe_to_raise(frame)
     if safe:
-        raise exception_for(signum)
+        raise _acted_on(signum)
+    if safe is False:
+        # called back from C code: try again when it has returned. Inside deferred() too: a
+        # compile spends most of its time in llvmlite's Python (Numba's dispatcher called
+        # back from there: False), and only a signal sent again finds it back in Numba's own
+        # code, where it stops the compile at once; recorded only, it waited for the minutes
+        # the compile takes.
+        import threading   # loaded already: code called back from C is NumPy's or Numba's
+
+        threading.Timer(RESEND_AFTER, _send_again, (signum,)).start()
     if _depth > 0:
         _pending = _pending or signum
         return
     if safe is False:
-        # called back from C code outside deferred(): try again when it has returned
-        import threading   # loaded already: code called back from C is NumPy's or Numba's
-
-        threading.Timer(RESEND_AFTER, os.kill, (os.getpid(), signum)).start()
         return
-    raise exception_for(signum)
+    raise _acted_on(signum)
+
+
+_acted = False   # a signal has been raised as an exception: none is sent again after that
+
+
+def _acted_on(signum: int) -> KeyboardInterrupt:
+    global _acted
+    _acted = True
+    return exception_for(signum)
+
+
+def _send_again(signum: int) -> None:
+    if not _acted:
+        os.kill(os.getpid(), signum)
 
 
 def _frames(frame):
@@ -153,9 +172,11 @@ class deferred:
     """
 
     def __enter__(self):
-        global _depth
+        global _depth, _acted
         self.main = _in_main_thread()
         if self.main:
+            if _depth == 0:
+                _acted = False   # a new block: a signal it gets may be sent again
             self.swapped = (_depth == 0
                             and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
             if self.swapped:
@@ -171,5 +192,5 @@ class deferred:
                 signal.signal(signal.SIGINT, signal.default_int_handler)
             if _depth == 0 and _pending is not None:
                 signum, _pending = _pending, None
-                raise exception_for(signum)
+                raise _acted_on(signum)
         return False
