@@ -26,8 +26,8 @@ def advance(model, x, v, h, steps, pairs):
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return threaded_drive(threaded_symplectic_euler_step, model, Motion(x, v), one_stage_scratch(x), h,
-                          steps, pairs)
+    return threaded_drive(threaded_symplectic_euler_step, model, Motion(x, v), one_stage_scratch(x),
+                          h, steps, pairs)
 
 
 @register

@@ -53,6 +53,12 @@ def out_of_reach(row, data, x0, x1, x2):
     return np.inf, 0.0, 1.0, 0.0
 
 
+def kind_kernel(cls, still_only):
+    if still_only and getattr(cls, "never_still", False):
+        return out_of_reach
+    return inlined(cls.distance_kernel)
+
+
 def build_dispatcher(kinds, still_only=False):
     """The dispatcher over ``kinds``; with ``still_only``, the kinds that deform by themselves
     (``never_still = True``) answer out_of_reach, for the lookups of terrains known to be still."""
@@ -63,8 +69,7 @@ def build_dispatcher(kinds, still_only=False):
     # too big for LLVM to inline) kept it, and made the plane's contact four times slower. The
     # deforming mesh's kernel, inlined, still made the plane's lookup ten times slower (LLVM no
     # longer takes the kind's branch out of the particle loop): hence the still dispatcher.
-    namespace = {f"kernel_{number}": out_of_reach
-                 if still_only and getattr(cls, "never_still", False) else inlined(cls.distance_kernel)
+    namespace = {f"kernel_{number}": kind_kernel(cls, still_only)
                  for number, cls in enumerate(kinds)}
     # registered with linecache so that tracebacks and Numba's error messages can show it
     linecache.cache[FILENAME] = (len(source), None, source.splitlines(True), FILENAME)

@@ -45,9 +45,9 @@ BLOCK = 64   # particles whose terrain distances are looked up together (see app
 
 # STILL_LOOKUP: the per-particle loops look a still terrain up with the still dispatcher
 # (terrains/dispatch.py) directly on the model's arrays, as before terrains moved; the view
-# (world.terrain_at) is for the moving ones. An inline kernel taking arrays held across the loop counts their references at every
-# call, and that made a still plane's contact two to three times slower again
-# (benchmarks/terrain_dispatch.py).
+# (world.terrain_at) is for the moving ones. An inline kernel taking arrays held across the
+# loop counts their references at every call: through the view, a still plane's contact was two
+# to three times slower (benchmarks/terrain_lookup.py).
 
 
 @inline_kernel
