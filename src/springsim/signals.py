@@ -51,13 +51,12 @@ def on_signal(signum, frame):
         raise _acted_on(signum)
     if safe is False:
         # called back from C code: try again when it has returned. Inside deferred() too: a
-        # compile spends most of its time in llvmlite's Python (Numba's dispatcher called
-        # back from there: False), and only a signal sent again finds it back in Numba's own
-        # code, where it stops the compile at once; recorded only, it waited for the minutes
-        # the compile takes.
+        # compile calls back from LLVM (llvmlite.binding) too, and only a signal sent again
+        # finds it back in Numba's own code, where it stops the compile at once; recorded
+        # only, it waited for the minutes the compile takes.
         import threading   # loaded already: code called back from C is NumPy's or Numba's
 
-        threading.Timer(RESEND_AFTER, _send_again, (signum,)).start()
+        threading.Timer(RESEND_AFTER, _send_again, (signum, _generation)).start()
     if _depth > 0:
         _pending = _pending or signum
         return
@@ -66,17 +65,19 @@ def on_signal(signum, frame):
     raise _acted_on(signum)
 
 
-_acted = False   # a signal has been raised as an exception: none is sent again after that
+_generation = 0   # counts signals acted on and blocks begun: a resend from before is stale
 
 
 def _acted_on(signum: int) -> KeyboardInterrupt:
-    global _acted
-    _acted = True
+    global _generation
+    _generation += 1
     return exception_for(signum)
 
 
-def _send_again(signum: int) -> None:
-    if not _acted:
+def _send_again(signum: int, generation: int) -> None:
+    """Send the signal again, unless it has been acted on, a new block has begun since, or
+    on_signal no longer handles it (the default action would end the process)."""
+    if generation == _generation and signal.getsignal(signum) is on_signal:
         os.kill(os.getpid(), signum)
 
 
@@ -122,14 +123,15 @@ def _imported_from_c(frame) -> bool:
 
 def _safe_to_raise(frame) -> bool | None:
     """False where the innermost code that matters was called back from code that drops an
-    exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through llvmlite
-    (raising there hung the compile), a string run with PyRun_String by an extension
+    exception: a finalizer, Numba's unpickling for a compiled kernel, LLVM's callbacks through
+    llvmlite.binding (raising there hung the compile; llvmlite.ir is plain Python under Numba's
+    compile), a string run with PyRun_String by an extension
     (NumPy's lazy imports under Numba: CPython then kills itself with SIGINT at exit), or an
     import made by an extension's initialisation. True where it is Numba's dispatcher compiling
     a kernel, which passes an exception on to its caller. None elsewhere: plain Python."""
     for each in _frames(frame):
         module = _module(each)
-        if (module == "numba.core.serialize" or module.startswith("llvmlite")
+        if (module == "numba.core.serialize" or module.startswith("llvmlite.binding")
                 or _run_from_c(each) or _ignores_exceptions(each) or _imported_from_c(each)):
             return False
         if each.f_code.co_name == "_compile_for_args" and module.startswith("numba"):
@@ -172,11 +174,11 @@ class deferred:
     """
 
     def __enter__(self):
-        global _depth, _acted
+        global _depth, _generation
         self.main = _in_main_thread()
         if self.main:
             if _depth == 0:
-                _acted = False   # a new block: a signal it gets may be sent again
+                _generation += 1   # a new block: resends from before it are stale
             self.swapped = (_depth == 0
                             and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
             if self.swapped:

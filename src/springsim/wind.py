@@ -26,7 +26,6 @@ triangle's corners and the change of the normal with the positions are left out 
 """
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple
 
 import numpy as np
 
@@ -143,24 +142,10 @@ def pack_wind(wind: Wind | None) -> dict:
     return {"wind_settings": settings, "wind_keys": keys, "wind_modes": modes}
 
 
-class Air(NamedTuple):
-    """The model's wind tables, taken once per kernel call: an inline kernel handed the whole
-    model counts a reference to each of its arrays at every call (every triangle)."""
-
-    settings: np.ndarray   # (6,) DENSITY, DRAG, FRICTION, STRENGTH, LENGTH, ON
-    keys: np.ndarray       # (K, 4) time and the mean wind's velocity
-    modes: np.ndarray      # (GUST_MODES or 0, 8) each gust mode's direction, wave, frequency, phase
-
-
 @inline_kernel
-def air_of(model):
-    return Air(model.wind_settings, model.wind_keys, model.wind_modes)
-
-
-@inline_kernel
-def air_velocity(air, x0, x1, x2, t):
+def air_velocity(model, x0, x1, x2, t):
     """The air's velocity (m/s) at a point and time: the keyed mean wind plus the gusts."""
-    keys = air.keys
+    keys = model.wind_keys
     last = keys.shape[0] - 1
     if t <= keys[0, 0] or last == 0:
         a0, a1, a2 = keys[0, 1], keys[0, 2], keys[0, 3]
@@ -174,10 +159,10 @@ def air_velocity(air, x0, x1, x2, t):
         a0 = keys[k, 1] + s * (keys[k + 1, 1] - keys[k, 1])
         a1 = keys[k, 2] + s * (keys[k + 1, 2] - keys[k, 2])
         a2 = keys[k, 3] + s * (keys[k + 1, 3] - keys[k, 3])
-    modes = air.modes
+    modes = model.wind_modes
     if modes.shape[0] > 0:
         speed = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-        size = air.settings[STRENGTH] * (speed if speed > 0.0 else 1.0)
+        size = model.wind_settings[STRENGTH] * (speed if speed > 0.0 else 1.0)
         size /= math.sqrt(modes.shape[0] / 2.0)   # the modes' sum has about this spread
         for g in range(modes.shape[0]):
             wave = math.sin(modes[g, 3] * x0 + modes[g, 4] * x1 + modes[g, 5] * x2
@@ -189,7 +174,7 @@ def air_velocity(air, x0, x1, x2, t):
 
 
 @inline_kernel
-def triangle_wind(air, x, v, a, b, c, t):
+def triangle_wind(model, x, v, a, b, c, t):
     """The wind force (N) on triangle (a, b, c), and the coefficients of its corners'
     diagonal derivative, rho C_d A |w_n| / 9 (along n) and rho C_f A |w_t| / 9 (across), with n."""
     e0, e1, e2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
@@ -201,7 +186,7 @@ def triangle_wind(air, x, v, a, b, c, t):
     n0, n1, n2 = n0 / twice_area, n1 / twice_area, n2 / twice_area
     area = 0.5 * twice_area
     third = 1.0 / 3.0
-    air0, air1, air2 = air_velocity(air, (x[a, 0] + x[b, 0] + x[c, 0]) * third,
+    air0, air1, air2 = air_velocity(model, (x[a, 0] + x[b, 0] + x[c, 0]) * third,
                                     (x[a, 1] + x[b, 1] + x[c, 1]) * third,
                                     (x[a, 2] + x[b, 2] + x[c, 2]) * third, t)
     w0 = air0 - (v[a, 0] + v[b, 0] + v[c, 0]) * third
@@ -210,20 +195,20 @@ def triangle_wind(air, x, v, a, b, c, t):
     w_n = w0 * n0 + w1 * n1 + w2 * n2
     t0, t1, t2 = w0 - w_n * n0, w1 - w_n * n1, w2 - w_n * n2
     w_t = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-    rho = air.settings[DENSITY]
-    normal = 0.5 * rho * air.settings[DRAG] * area * abs(w_n)
-    along = 0.5 * rho * air.settings[FRICTION] * area * w_t
+    rho = model.wind_settings[DENSITY]
+    normal = 0.5 * rho * model.wind_settings[DRAG] * area * abs(w_n)
+    along = 0.5 * rho * model.wind_settings[FRICTION] * area * w_t
     return (normal * w_n * n0 + along * t0, normal * w_n * n1 + along * t1,
             normal * w_n * n2 + along * t2, 2.0 * normal / 9.0, 2.0 * along / 9.0, n0, n1, n2)
 
 
 @inline_kernel
-def ball_wind(air, r, x, v, i, t):
-    """Ball i's (radius r) relative air velocity w and 1/2 rho C_d pi r^2 |w| (its force is that
-    times w)."""
-    air0, air1, air2 = air_velocity(air, x[i, 0], x[i, 1], x[i, 2], t)
+def ball_wind(model, x, v, i, t):
+    """Ball i's relative air velocity w and 1/2 rho C_d pi r^2 |w| (its force is that times w)."""
+    r = model.radius[i]
+    air0, air1, air2 = air_velocity(model, x[i, 0], x[i, 1], x[i, 2], t)
     w0, w1, w2 = air0 - v[i, 0], air1 - v[i, 1], air2 - v[i, 2]
-    size = (0.5 * air.settings[DENSITY] * air.settings[DRAG] * math.pi * r * r
+    size = (0.5 * model.wind_settings[DENSITY] * model.wind_settings[DRAG] * math.pi * r * r
             * math.sqrt(w0 * w0 + w1 * w1 + w2 * w2))
     return w0, w1, w2, size
 
@@ -236,11 +221,10 @@ def add_wind_forces(model, x, v, scale, out):
     if model.wind_settings[ON] == 0.0:
         return
     t = model.clock[2]
-    air = air_of(model)
     triangles = model.wind_triangles
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
-        f0, f1, f2, _, _, _, _, _ = triangle_wind(air, x, v, a, b, c, t)
+        f0, f1, f2, _, _, _, _, _ = triangle_wind(model, x, v, a, b, c, t)
         share = model.wind_weights[k] / 3.0
         for i in (a, b, c):
             w = (scale[i] if scale.shape[0] > 1 else scale[0]) * share
@@ -248,7 +232,7 @@ def add_wind_forces(model, x, v, scale, out):
             out[i, 1] += w * f1
             out[i, 2] += w * f2
     for i in model.balls:
-        w0, w1, w2, size = ball_wind(air, model.radius[i], x, v, i, t)
+        w0, w1, w2, size = ball_wind(model, x, v, i, t)
         s = scale[i] if scale.shape[0] > 1 else scale[0]
         out[i, 0] += s * size * w0
         out[i, 1] += s * size * w1
@@ -261,11 +245,10 @@ def add_wind_jacobian(model, diagonal_slot, x, v, h, blocks):
     if model.wind_settings[ON] == 0.0:
         return
     t = model.clock[2]
-    air = air_of(model)
     triangles = model.wind_triangles
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
-        _, _, _, normal, along, n0, n1, n2 = triangle_wind(air, x, v, a, b, c, t)
+        _, _, _, normal, along, n0, n1, n2 = triangle_wind(model, x, v, a, b, c, t)
         normal, along = normal * model.wind_weights[k], along * model.wind_weights[k]
         n = (n0, n1, n2)
         for i in (a, b, c):
@@ -276,7 +259,7 @@ def add_wind_jacobian(model, diagonal_slot, x, v, h, blocks):
                     blocks[slot, r, s] += h * (normal * n[r] * n[s]
                                                + along * (identity - n[r] * n[s]))
     for i in model.balls:
-        w0, w1, w2, size = ball_wind(air, model.radius[i], x, v, i, t)
+        w0, w1, w2, size = ball_wind(model, x, v, i, t)
         w = (w0, w1, w2)
         speed = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if speed == 0.0:
