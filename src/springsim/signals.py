@@ -59,10 +59,8 @@ def on_signal(signum, frame):
         threading.Timer(RESEND_AFTER, _send_again, (signum, _generation)).start()
     if _depth > 0:
         _pending = _pending or signum
-        return
-    if safe is False:
-        return
-    raise _acted_on(signum)
+    elif safe is None:
+        raise _acted_on(signum)
 
 
 _generation = 0   # counts signals acted on and blocks begun: a resend from before is stale
