@@ -193,3 +193,26 @@ def test_contact_looked_up_a_block_ahead_is_the_planes(folder):
     touched = np.any(results[0] != a, axis=1)
     assert touched.sum() > 300 and not touched[::7].any()
     np.testing.assert_allclose(results[1], results[0], rtol=0, atol=1e-9 * np.abs(a).max())
+
+
+def test_the_still_dispatcher_gives_every_still_kind_the_same_bits(folder):
+    """The contact loops look still terrains up with still_terrain_distance, which leaves out
+    the kinds that are never still (the deforming mesh: with it, LLVM no longer keeps the
+    plane's lookup fast): for every other kind it answers exactly as terrain_distance."""
+    from springsim.terrains import KINDS, Bowl, Plane, still_terrain_distance
+
+    path = folder / "ico_still.stl"
+    trimesh.creation.icosphere(subdivisions=2, radius=1.5).export(path)
+    terrains = [Plane(), Sphere(), Bowl(), MeshTerrain(file=str(path), position=(0.2, 0.1, 0.0))]
+    for number, terrain in enumerate(terrains):
+        terrain.validate(f"terrains.{number}")
+    packed = pack_terrains(terrains)
+    still_kinds = {number for number, cls in enumerate(KINDS)
+                   if not getattr(cls, "never_still", False)}
+    assert set(packed["terrain_kind"].tolist()) == still_kinds   # every still kind is tried
+    x = np.random.default_rng(5).uniform(-3.0, 3.0, (200, 3))
+    for t in range(len(terrains)):
+        for point in x:
+            arguments = (packed["terrain_kind"][t], packed["terrain_parameters"][t],
+                         packed["terrain_data"], *point, 0.01)
+            assert still_terrain_distance(*arguments) == terrain_distance(*arguments)

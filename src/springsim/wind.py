@@ -9,7 +9,8 @@ travelling waves with random directions, wave numbers and phases drawn once from
 air is a function of place and time alone, so runs are deterministic and resume exactly.
 
 On a triangle of area A and unit normal n, with w the air's velocity relative to the triangle
-(the air at the triangle's centre minus the mean of its corners' velocities):
+(the mean wind plus the mean of the gusts at its corners, minus the mean of its corners'
+velocities):
 
     F = 1/2 rho C_d A |w_n| w_n n  +  1/2 rho C_f A |w_t| w_t,   w_n = w . n,  w_t = w - w_n n
 
@@ -26,6 +27,7 @@ triangle's corners and the change of the normal with the positions are left out 
 """
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -142,9 +144,23 @@ def pack_wind(wind: Wind | None) -> dict:
     return {"wind_settings": settings, "wind_keys": keys, "wind_modes": modes}
 
 
+class Air(NamedTuple):
+    """The air at one time, taken once per kernel call for its loops over triangles: scalars
+    only, since an array read from a tuple or the model inside such a loop has its reference
+    counted at every triangle (six times the triangle's own force)."""
+
+    u0: float       # the keyed mean wind's velocity (m/s)
+    u1: float
+    u2: float
+    gust: float     # each gust mode's amplitude (m/s)
+    normal: float   # 1/2 rho C_d
+    along: float    # 1/2 rho C_f
+
+
 @inline_kernel
-def air_velocity(model, x0, x1, x2, t):
-    """The air's velocity (m/s) at a point and time: the keyed mean wind plus the gusts."""
+def air_at(model, t):
+    """The air at time t: the keyed mean wind, interpolated linearly and held outside the keys,
+    and the gusts' amplitude, a share of its speed."""
     keys = model.wind_keys
     last = keys.shape[0] - 1
     if t <= keys[0, 0] or last == 0:
@@ -159,24 +175,54 @@ def air_velocity(model, x0, x1, x2, t):
         a0 = keys[k, 1] + s * (keys[k + 1, 1] - keys[k, 1])
         a1 = keys[k, 2] + s * (keys[k + 1, 2] - keys[k, 2])
         a2 = keys[k, 3] + s * (keys[k + 1, 3] - keys[k, 3])
-    modes = model.wind_modes
-    if modes.shape[0] > 0:
+    settings = model.wind_settings
+    gust = 0.0
+    if model.wind_modes.shape[0] > 0:
         speed = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-        size = model.wind_settings[STRENGTH] * (speed if speed > 0.0 else 1.0)
-        size /= math.sqrt(modes.shape[0] / 2.0)   # the modes' sum has about this spread
-        for g in range(modes.shape[0]):
-            wave = math.sin(modes[g, 3] * x0 + modes[g, 4] * x1 + modes[g, 5] * x2
-                            - modes[g, 6] * t + modes[g, 7])
-            a0 += size * wave * modes[g, 0]
-            a1 += size * wave * modes[g, 1]
-            a2 += size * wave * modes[g, 2]
+        gust = settings[STRENGTH] * (speed if speed > 0.0 else 1.0)
+        gust /= math.sqrt(model.wind_modes.shape[0] / 2.0)   # the modes' sum has about this spread
+    rho = settings[DENSITY]
+    return Air(a0, a1, a2, gust, 0.5 * rho * settings[DRAG], 0.5 * rho * settings[FRICTION])
+
+
+@inline_kernel
+def gust_velocity(air, modes, x0, x1, x2, t):
+    """The gusts' velocity (m/s) at a point: the sum of the travelling waves ``modes``
+    (model.wind_modes, read once by the caller)."""
+    a0 = a1 = a2 = 0.0
+    for g in range(modes.shape[0]):
+        wave = math.sin(modes[g, 3] * x0 + modes[g, 4] * x1 + modes[g, 5] * x2
+                        - modes[g, 6] * t + modes[g, 7])
+        a0 += air.gust * wave * modes[g, 0]
+        a1 += air.gust * wave * modes[g, 1]
+        a2 += air.gust * wave * modes[g, 2]
     return a0, a1, a2
 
 
 @inline_kernel
-def triangle_wind(model, x, v, a, b, c, t):
+def corner_gusts(air, modes, x, triangles, t):
+    """The gusts at every corner of the wind triangles, each particle's once (a sum of sines is
+    the air's costly part, and a cloth has a quarter as many particles as wind triangles); no
+    rows without gusts."""
+    gusts = np.zeros((x.shape[0] if modes.shape[0] > 0 else 0, 3))
+    if modes.shape[0] == 0:
+        return gusts
+    seen = np.zeros(x.shape[0], np.bool_)
+    for k in range(triangles.shape[0]):
+        for j in range(3):
+            i = triangles[k, j]
+            if not seen[i]:
+                seen[i] = True
+                gusts[i, 0], gusts[i, 1], gusts[i, 2] = gust_velocity(air, modes, x[i, 0],
+                                                                      x[i, 1], x[i, 2], t)
+    return gusts
+
+
+@inline_kernel
+def triangle_wind(air, gusts, x, v, a, b, c):
     """The wind force (N) on triangle (a, b, c), and the coefficients of its corners'
-    diagonal derivative, rho C_d A |w_n| / 9 (along n) and rho C_f A |w_t| / 9 (across), with n."""
+    diagonal derivative, rho C_d A |w_n| / 9 (along n) and rho C_f A |w_t| / 9 (across), with n.
+    ``gusts``: corner_gusts."""
     e0, e1, e2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
     f0, f1, f2 = x[c, 0] - x[a, 0], x[c, 1] - x[a, 1], x[c, 2] - x[a, 2]
     n0, n1, n2 = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
@@ -186,30 +232,30 @@ def triangle_wind(model, x, v, a, b, c, t):
     n0, n1, n2 = n0 / twice_area, n1 / twice_area, n2 / twice_area
     area = 0.5 * twice_area
     third = 1.0 / 3.0
-    air0, air1, air2 = air_velocity(model, (x[a, 0] + x[b, 0] + x[c, 0]) * third,
-                                    (x[a, 1] + x[b, 1] + x[c, 1]) * third,
-                                    (x[a, 2] + x[b, 2] + x[c, 2]) * third, t)
+    air0, air1, air2 = air.u0, air.u1, air.u2
+    if gusts.shape[0] > 0:
+        air0 += (gusts[a, 0] + gusts[b, 0] + gusts[c, 0]) * third
+        air1 += (gusts[a, 1] + gusts[b, 1] + gusts[c, 1]) * third
+        air2 += (gusts[a, 2] + gusts[b, 2] + gusts[c, 2]) * third
     w0 = air0 - (v[a, 0] + v[b, 0] + v[c, 0]) * third
     w1 = air1 - (v[a, 1] + v[b, 1] + v[c, 1]) * third
     w2 = air2 - (v[a, 2] + v[b, 2] + v[c, 2]) * third
     w_n = w0 * n0 + w1 * n1 + w2 * n2
     t0, t1, t2 = w0 - w_n * n0, w1 - w_n * n1, w2 - w_n * n2
     w_t = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-    rho = model.wind_settings[DENSITY]
-    normal = 0.5 * rho * model.wind_settings[DRAG] * area * abs(w_n)
-    along = 0.5 * rho * model.wind_settings[FRICTION] * area * w_t
+    normal = air.normal * area * abs(w_n)
+    along = air.along * area * w_t
     return (normal * w_n * n0 + along * t0, normal * w_n * n1 + along * t1,
             normal * w_n * n2 + along * t2, 2.0 * normal / 9.0, 2.0 * along / 9.0, n0, n1, n2)
 
 
 @inline_kernel
-def ball_wind(model, x, v, i, t):
-    """Ball i's relative air velocity w and 1/2 rho C_d pi r^2 |w| (its force is that times w)."""
-    r = model.radius[i]
-    air0, air1, air2 = air_velocity(model, x[i, 0], x[i, 1], x[i, 2], t)
-    w0, w1, w2 = air0 - v[i, 0], air1 - v[i, 1], air2 - v[i, 2]
-    size = (0.5 * model.wind_settings[DENSITY] * model.wind_settings[DRAG] * math.pi * r * r
-            * math.sqrt(w0 * w0 + w1 * w1 + w2 * w2))
+def ball_wind(air, modes, r, x, v, i, t):
+    """Ball i's (radius r) relative air velocity w and 1/2 rho C_d pi r^2 |w| (its force is that
+    times w)."""
+    g0, g1, g2 = gust_velocity(air, modes, x[i, 0], x[i, 1], x[i, 2], t)
+    w0, w1, w2 = air.u0 + g0 - v[i, 0], air.u1 + g1 - v[i, 1], air.u2 + g2 - v[i, 2]
+    size = air.normal * math.pi * r * r * math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     return w0, w1, w2, size
 
 
@@ -221,10 +267,12 @@ def add_wind_forces(model, x, v, scale, out):
     if model.wind_settings[ON] == 0.0:
         return
     t = model.clock[2]
+    air, modes = air_at(model, t), model.wind_modes
     triangles = model.wind_triangles
+    gusts = corner_gusts(air, modes, x, triangles, t)
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
-        f0, f1, f2, _, _, _, _, _ = triangle_wind(model, x, v, a, b, c, t)
+        f0, f1, f2, _, _, _, _, _ = triangle_wind(air, gusts, x, v, a, b, c)
         share = model.wind_weights[k] / 3.0
         for i in (a, b, c):
             w = (scale[i] if scale.shape[0] > 1 else scale[0]) * share
@@ -232,7 +280,7 @@ def add_wind_forces(model, x, v, scale, out):
             out[i, 1] += w * f1
             out[i, 2] += w * f2
     for i in model.balls:
-        w0, w1, w2, size = ball_wind(model, x, v, i, t)
+        w0, w1, w2, size = ball_wind(air, modes, model.radius[i], x, v, i, t)
         s = scale[i] if scale.shape[0] > 1 else scale[0]
         out[i, 0] += s * size * w0
         out[i, 1] += s * size * w1
@@ -245,10 +293,12 @@ def add_wind_jacobian(model, diagonal_slot, x, v, h, blocks):
     if model.wind_settings[ON] == 0.0:
         return
     t = model.clock[2]
+    air, modes = air_at(model, t), model.wind_modes
     triangles = model.wind_triangles
+    gusts = corner_gusts(air, modes, x, triangles, t)
     for k in range(triangles.shape[0]):
         a, b, c = triangles[k, 0], triangles[k, 1], triangles[k, 2]
-        _, _, _, normal, along, n0, n1, n2 = triangle_wind(model, x, v, a, b, c, t)
+        _, _, _, normal, along, n0, n1, n2 = triangle_wind(air, gusts, x, v, a, b, c)
         normal, along = normal * model.wind_weights[k], along * model.wind_weights[k]
         n = (n0, n1, n2)
         for i in (a, b, c):
@@ -259,7 +309,7 @@ def add_wind_jacobian(model, diagonal_slot, x, v, h, blocks):
                     blocks[slot, r, s] += h * (normal * n[r] * n[s]
                                                + along * (identity - n[r] * n[s]))
     for i in model.balls:
-        w0, w1, w2, size = ball_wind(model, x, v, i, t)
+        w0, w1, w2, size = ball_wind(air, modes, model.radius[i], x, v, i, t)
         w = (w0, w1, w2)
         speed = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if speed == 0.0:

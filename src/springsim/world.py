@@ -3,12 +3,13 @@ terrains' frames.
 
 Motion is a function of time alone (motion.py), so the kernels never carry it from step to
 step: a step (or a stage of one) calls ``move_world(model, t)`` for its own time, which writes
-every motion's pose into ``model.motion_pose``, and the contact kernels then call
+every motion's pose into ``model.motion_pose``, and the contact kernels then call, with
+``terrains = terrain_view(model)`` taken once per kernel call,
 
-- ``terrain_at(model, t, x0, x1, x2, radius) -> (phi, nx, ny, nz)``: the signed distance and
+- ``terrain_at(terrains, t, x0, x1, x2, radius) -> (phi, nx, ny, nz)``: the signed distance and
   normal of terrain t at the point, looked up in the terrain's own frame (x placed = R^T (y - c)
   + pivot) so that any kind, a mesh's distance grid included, moves without being rebuilt;
-- ``surface_velocity(model, t, x0, x1, x2) -> (ux, uy, uz)``: how fast the terrain's surface
+- ``surface_velocity(terrains, t, x0, x1, x2) -> (ux, uy, uz)``: how fast the terrain's surface
   moves there, c' + w x (y - c) (zero for a still terrain), which restitution and friction are
   relative to.
 
@@ -33,6 +34,8 @@ point, with a damper against the velocity relative to the path: a force k (p - x
 in every stage's forces at the stage's time (``add_pin_forces``) and in backward Euler's solve
 at the step's end with its derivative (``add_pin_jacobian``).
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from ._jit import inline_kernel, kernel
@@ -152,34 +155,53 @@ def aim_pins(model, x, v, h):
         v[i, 2] = (p[11] + p[6] * d0 + p[7] * d1 + p[8] * d2 - x[i, 2]) / h
 
 
+class TerrainView(NamedTuple):
+    """The model's tables that terrain_at and surface_velocity read. An inline kernel handed the
+    whole model counts a reference to each of its arrays at every call: a microsecond per
+    particle and terrain, fifty times the plane's own lookup."""
+
+    kind: np.ndarray        # (T,) each terrain's kind number (terrains/dispatch.py)
+    parameters: np.ndarray  # (T, K) each terrain's packed row
+    data: np.ndarray        # the kinds' shared data buffer (a mesh's grid)
+    motion: np.ndarray      # (T,) the terrain's row of pose, or -1 for a still terrain
+    pose: np.ndarray        # (M, POSE) every motion's pose now (move_world)
+    deforming: np.ndarray   # (T,) the terrain's deforming surface, or -1
+
+
 @inline_kernel
-def terrain_at(model, t, x0, x1, x2, radius):
+def terrain_view(model):
+    return TerrainView(model.terrain_kind, model.terrain_parameters, model.terrain_data,
+                       model.terrain_motion, model.motion_pose, model.terrain_deforming)
+
+
+@inline_kernel
+def terrain_at(terrains, t, x0, x1, x2, radius):
     """Signed distance (m) from a particle's surface to terrain t at its current pose, and the
     unit normal (world frame)."""
-    if model.terrain_motion[t] < 0:
-        return terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                model.terrain_data, x0, x1, x2, radius)
-    p = model.motion_pose[model.terrain_motion[t]]
+    if terrains.motion[t] < 0:
+        return terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
+                                x0, x1, x2, radius)
+    p = terrains.pose[terrains.motion[t]]
     # y - c, then R^T (y - c) + pivot: the point where the terrain was placed in the scene
     d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
     l0 = p[0] * d0 + p[3] * d1 + p[6] * d2 + p[12]
     l1 = p[1] * d0 + p[4] * d1 + p[7] * d2 + p[13]
     l2 = p[2] * d0 + p[5] * d1 + p[8] * d2 + p[14]
-    phi, m0, m1, m2 = terrain_distance(model.terrain_kind[t], model.terrain_parameters[t],
-                                       model.terrain_data, l0, l1, l2, radius)
+    phi, m0, m1, m2 = terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
+                                       l0, l1, l2, radius)
     return (phi, p[0] * m0 + p[1] * m1 + p[2] * m2, p[3] * m0 + p[4] * m1 + p[5] * m2,
             p[6] * m0 + p[7] * m1 + p[8] * m2)
 
 
 @inline_kernel
-def surface_velocity(model, t, x0, x1, x2):
+def surface_velocity(terrains, t, x0, x1, x2):
     """Velocity (m/s) of terrain t's material at the world point (x0, x1, x2): c' + w x (y - c),
     or a deforming terrain's at its closest point."""
-    if model.terrain_deforming[t] >= 0:
-        return deformed_velocity(model.terrain_data, model.terrain_deforming[t], x0, x1, x2)
-    if model.terrain_motion[t] < 0:
+    if terrains.deforming[t] >= 0:
+        return deformed_velocity(terrains.data, terrains.deforming[t], x0, x1, x2)
+    if terrains.motion[t] < 0:
         return 0.0, 0.0, 0.0
-    p = model.motion_pose[model.terrain_motion[t]]
+    p = terrains.pose[terrains.motion[t]]
     d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
     w0, w1, w2 = p[18], p[19], p[20]
     return (p[15] + w1 * d2 - w2 * d1, p[16] + w2 * d0 - w0 * d2, p[17] + w0 * d1 - w1 * d0)

@@ -46,7 +46,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from ..world import surface_velocity, terrain_at
+from ..world import surface_velocity, terrain_at, terrain_view
 
 FREE, CONTACT, PINNED = 0, 1, 2
 SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
@@ -64,7 +64,7 @@ def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
 
 
 @kernel
-def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
+def closest_terrain(model, terrains, x, i, u0, u1, u2, h, in_reach):
     """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
     normal and the normal velocity; terrain -1 if it reaches none.
 
@@ -75,7 +75,7 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
                                      model.terrain_offset[i])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
@@ -90,12 +90,12 @@ def closest_terrain(model, x, i, u0, u1, u2, h, in_reach):
 
 
 @kernel
-def make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface, terrain,
-                 normal_floor):
+def make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
+                 terrain, normal_floor):
     kind[i] = CONTACT
     terrain[i] = t
     normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-    s0, s1, s2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+    s0, s1, s2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
     surface[i, 0], surface[i, 1], surface[i, 2] = s0, s1, s2
     normal_floor[i] = lowest_normal_velocity(phi, v_n, s0 * nx + s1 * ny + s2 * nz, h,
                                              model.terrain_epsilon[t])
@@ -107,6 +107,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without."""
+    terrains = terrain_view(model)
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
         kind[i] = FREE
@@ -114,11 +115,11 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
         if model.inv_mass[i] == 0.0:
             kind[i] = PINNED
         else:
-            t, phi, nx, ny, nz, v_n = closest_terrain(model, x, i, v[i, 0], v[i, 1], v[i, 2],
-                                                      h, True)
+            t, phi, nx, ny, nz, v_n = closest_terrain(model, terrains, x, i, v[i, 0], v[i, 1],
+                                                      v[i, 2], h, True)
             if t >= 0:
-                make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
-                             terrain, normal_floor)
+                make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
+                             surface, terrain, normal_floor)
         if kind[i] != CONTACT or terrain[i] != previous:
             friction_damping[i] = 0.0
 
@@ -258,17 +259,18 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
     all contacts) moved by more than FRICTION_SETTLED of their total."""
     changed = 0
     friction_total = friction_moved = 0.0
+    terrains = terrain_view(model)
     for i in range(x.shape[0]):
         if kind[i] == PINNED:
             continue
         u0, u1, u2 = (v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1],
                       v[i, 2] + dv[i, 2] + ddv[i, 2])   # the velocity at the end of the step
         if kind[i] == FREE:
-            t, phi, nx, ny, nz, _ = closest_terrain(model, x, i, u0, u1, u2, h, False)
+            t, phi, nx, ny, nz, _ = closest_terrain(model, terrains, x, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-                make_contact(model, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
-                             terrain, normal_floor)
+                make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
+                             surface, terrain, normal_floor)
                 hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
                 changed += 1
             continue

@@ -296,7 +296,7 @@ class _WindDrawing:
 
 
 def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
-    """The keyed wind velocity (m/s) at time t, as wind.air_velocity has it before the gusts:
+    """The keyed wind velocity (m/s) at time t, as wind.air_at has it, before the gusts:
     linear between keys, held before the first and after the last."""
     return np.array([np.interp(t, keys[:, 0], keys[:, 1 + axis]) for axis in range(3)])
 

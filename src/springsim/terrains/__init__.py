@@ -41,10 +41,11 @@ for _module in pkgutil.iter_modules(__path__):
 registered_kinds()   # number the kinds and order TERRAIN_TYPES, now that all are in
 
 from .bowl import Bowl  # noqa: E402  (the built-in kinds, importable from springsim.terrains)
-from .dispatch import terrain_distance, terrain_looks_ahead  # noqa: E402
+from .dispatch import still_terrain_distance, terrain_distance, terrain_looks_ahead  # noqa: E402
 from .mesh import MeshTerrain  # noqa: E402
 from .plane import Plane, tilted_plane  # noqa: E402
 from .sphere import Sphere  # noqa: E402
 
 __all__ = ["Contact", "Plane", "tilted_plane", "Sphere", "Bowl", "MeshTerrain", "TERRAIN_TYPES",
-           "KINDS", "pack_terrains", "terrain_distance", "terrain_looks_ahead"]
+           "KINDS", "pack_terrains", "terrain_distance", "still_terrain_distance",
+           "terrain_looks_ahead"]

@@ -15,7 +15,9 @@ the kind in lists and menus. The class provides:
 - ``points_near(corners, size)``: points of the terrain under a box, for cameras;
 - ``validate(key)``, and the contact settings of ``Contact``;
 - optionally ``look_ahead = True``: the kernel is long (a mesh's grid), and the contact kernel
-  looks it up a block of particles ahead of their contact (collision/response/terrain.py says why).
+  looks it up a block of particles ahead of their contact (collision/response/terrain.py says why);
+- optionally ``never_still = True``: its surface moves by itself (a point cache), so it is never
+  looked up as a still terrain (dispatch.still_terrain_distance).
 """
 from dataclasses import dataclass
 

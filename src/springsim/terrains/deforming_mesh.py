@@ -402,6 +402,7 @@ class DeformingMesh:
 
     distance_kernel = deformed_distance
     look_ahead = True
+    never_still = True   # never looked up as a still terrain (dispatch.still_terrain_distance)
 
 
 register(DeformingMesh, {}, order=4)

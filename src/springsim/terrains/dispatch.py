@@ -13,6 +13,7 @@ The package docstring says why it is generated. The source it compiles reads, fo
 """
 import linecache
 
+import numpy as np
 from numba import njit
 
 from .._jit import FASTMATH
@@ -46,13 +47,29 @@ def inlined(dispatcher):
         dispatcher.py_func)
 
 
-def build_dispatcher(kinds):
+@njit(fastmath=FASTMATH, error_model="numpy", inline="always")
+def out_of_reach(row, data, x0, x1, x2):
+    """What the still dispatcher answers for a kind that is never still: nothing near."""
+    return np.inf, 0.0, 1.0, 0.0
+
+
+def kind_kernel(cls, still_only):
+    if still_only and getattr(cls, "never_still", False):
+        return out_of_reach
+    return inlined(cls.distance_kernel)
+
+
+def build_dispatcher(kinds, still_only=False):
+    """The dispatcher over ``kinds``; with ``still_only``, the kinds that deform by themselves
+    (``never_still = True``) answer out_of_reach, for the lookups of terrains known to be still."""
     source = dispatcher_source(len(kinds))
     # Every kind's kernel is inlined into the dispatcher, and the dispatcher into its callers, at
     # Numba's level (inline="always"): then no call is left in the contact loops, and Numba drops
     # the reference counting of the row it passes; a call left in any branch (the mesh kernel is
-    # too big for LLVM to inline) kept it, and made the plane's contact four times slower.
-    namespace = {f"kernel_{number}": inlined(cls.distance_kernel)
+    # too big for LLVM to inline) kept it, and made the plane's contact four times slower. The
+    # deforming mesh's kernel, inlined, still made the plane's lookup ten times slower (LLVM no
+    # longer takes the kind's branch out of the particle loop): hence the still dispatcher.
+    namespace = {f"kernel_{number}": kind_kernel(cls, still_only)
                  for number, cls in enumerate(kinds)}
     # registered with linecache so that tracebacks and Numba's error messages can show it
     linecache.cache[FILENAME] = (len(source), None, source.splitlines(True), FILENAME)
@@ -77,4 +94,5 @@ def build_looks_ahead(kinds):
 
 
 terrain_distance = build_dispatcher(KINDS)
+still_terrain_distance = build_dispatcher(KINDS, still_only=True)
 terrain_looks_ahead = build_looks_ahead(KINDS)

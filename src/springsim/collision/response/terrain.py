@@ -37,11 +37,17 @@ from numba import prange
 import numpy as np
 
 from ..._jit import inline_kernel, kernel
-from ...terrains import terrain_looks_ahead
-from ...world import surface_velocity, terrain_at
+from ...terrains import still_terrain_distance, terrain_looks_ahead
+from ...world import surface_velocity, terrain_at, terrain_view
 
 
 BLOCK = 64   # particles whose terrain distances are looked up together (see apply_contact_forces)
+
+# STILL_LOOKUP: the per-particle loops look a still terrain up with the still dispatcher
+# (terrains/dispatch.py) directly on the model's arrays, as before terrains moved; the view
+# (world.terrain_at) is for the moving ones. An inline kernel taking arrays held across the
+# loop counts their references at every call: through the view, a still plane's contact was two
+# to three times slower (benchmarks/terrain_lookup.py).
 
 
 @inline_kernel
@@ -59,6 +65,7 @@ def apply_contact_forces(model, x, v, h, a):
     contact several times slower (references counted per call), and into a kernel
     on scalars 1.5 times."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
+    terrains = terrain_view(model)
     blocks = False
     for t in range(epsilon.shape[0]):
         blocks = blocks or terrain_looks_ahead(model.terrain_kind[t])
@@ -69,13 +76,22 @@ def apply_contact_forces(model, x, v, h, a):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
-            phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
-                                         model.terrain_offset[i])
+            # a still terrain looked up with the model's own arrays (STILL_LOOKUP)
+            still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
+            if still:
+                phi, nx, ny, nz = still_terrain_distance(
+                    model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
+                    x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+            else:
+                phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
+                                             model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
             # the velocity relative to the terrain's surface there (zero for a still terrain)
-            u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+            u0 = u1 = u2 = 0.0
+            if not still:
+                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
             r0, r1, r2 = v[i, 0] - u0, v[i, 1] - u1, v[i, 2] - u2
             v_n = r0 * nx + r1 * ny + r2 * nz
             # The reaction cancels the push into the surface; a particle already moving away
@@ -101,6 +117,7 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
     mesh floor's contact: benchmarks/mesh_terrain.py). A particle
     meets the terrains in the same order as one by one, so the results are the same."""
     epsilon, friction = model.terrain_epsilon, model.terrain_friction
+    terrains = terrain_view(model)
     found = np.empty((BLOCK, 4))
     for start in range(0, x.shape[0], BLOCK):
         stop = min(start + BLOCK, x.shape[0])
@@ -110,7 +127,7 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
                 for i in range(start, stop):
                     found[i - start, 0], found[i - start, 1], found[i - start, 2], \
                         found[i - start, 3] = terrain_at(
-                            model, t, x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+                            terrains, t, x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
             for i in range(start, stop):
                 if model.inv_mass[i] == 0.0:
                     continue
@@ -118,12 +135,12 @@ def apply_contact_forces_in_blocks(model, x, v, h, a):
                     phi, nx, ny, nz = found[i - start, 0], found[i - start, 1], \
                         found[i - start, 2], found[i - start, 3]
                 else:
-                    phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
+                    phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
                                                  model.terrain_offset[i])
                 if phi >= epsilon[t]:
                     continue
                 a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
-                u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
                 r0, r1, r2 = v[i, 0] - u0, v[i, 1] - u1, v[i, 2] - u2
                 v_n = r0 * nx + r1 * ny + r2 * nz   # relative to the surface
                 # The reaction cancels the push into the surface; a particle already moving away
@@ -167,17 +184,26 @@ def resolve_terrain_impacts(model, x, v):
     """After a step: reflect approaching velocities with restitution, lift particles out.
     Particle by particle, independently: on threads in a threaded kernel (apply_contact_forces)."""
     epsilon, restitution = model.terrain_epsilon, model.terrain_restitution
+    terrains = terrain_view(model)
     g = model.gravity
     g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     for i in prange(x.shape[0]):
         if model.inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
-            phi, nx, ny, nz = terrain_at(model, t, x[i, 0], x[i, 1], x[i, 2],
-                                         model.terrain_offset[i])
+            still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
+            if still:   # STILL_LOOKUP
+                phi, nx, ny, nz = still_terrain_distance(
+                    model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
+                    x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+            else:
+                phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
+                                             model.terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
-            u0, u1, u2 = surface_velocity(model, t, x[i, 0], x[i, 1], x[i, 2])
+            u0 = u1 = u2 = 0.0
+            if not still:
+                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
             v_n = (v[i, 0] - u0) * nx + (v[i, 1] - u1) * ny + (v[i, 2] - u2) * nz   # relative
             if v_n < 0.0:
                 # slower than this, the rebound would stay in the band: resting contact (module doc)
