@@ -258,6 +258,12 @@ file = "plate.obj"
     ('[terrains.animation]\nfile = "missing.pc2"', "", "cloth", "terrains.0.animation.file",
      "no such file"),
     ('[terrains.animation]\nfile = "plate.obj"', "", "cloth", "terrains.0.animation.file",
+     "an OBJ animation is a numbered sequence"),
+    ('[terrains.animation]\nfile = "walk_####.obj"', "", "cloth", "terrains.0.animation.file",
+     "no file walk_<number>.obj found"),
+    ('[terrains.animation]\nfile = "step_0001.obj"', "", "cloth", "terrains.0.animation.file",
+     "has 8 vertices, but the sequence's first file step_0001.obj has 9"),
+    ('[terrains.animation]\nfile = "plate.txt"', "", "cloth", "terrains.0.animation.file",
      "must be a point cache"),
     ('[terrains.animation]\nfile = "truncated.pc2"', "", "cloth", "terrains.0.animation.file",
      "is truncated"),
@@ -279,6 +285,9 @@ file = "plate.obj"
 def test_bad_caches_are_refused_in_one_line(tmp_path, terrain, pin, body, key, says):
     path = bad_scene(tmp_path, terrain, pin, body)
     (tmp_path / "truncated.pc2").write_bytes((tmp_path / "nine.pc2").read_bytes()[:-5])
+    vertices, triangles = plate(n=3, size=1.0)
+    write_obj(tmp_path / "step_0001.obj", vertices, triangles)
+    write_obj(tmp_path / "step_0002.obj", vertices[:8], triangles[:4])
     with pytest.raises(SceneError) as caught:
         springsim.Simulation(load_scene(path))
     assert caught.value.key.endswith(key) and says in str(caught.value)
@@ -295,6 +304,34 @@ def test_mdd_and_pc2_of_the_same_samples_read_the_same(tmp_path):
     mdd = Animation(str(tmp_path / "a.mdd"), start=0.5).cache()
     assert np.allclose(pc2.times, mdd.times, atol=1e-6) and np.array_equal(pc2.points, mdd.points)
     assert pc2.times[0] == 0.5 and pc2.times[-1] == pytest.approx(0.6)
+
+
+def test_an_obj_sequence_is_the_point_cache_of_the_same_vertices(platform_files, tmp_path):
+    """A numbered OBJ sequence holding the PC2's samples, exported every other frame (numbers
+    1, 3, 5, ... at 48 frames/s: the PC2's 24 samples a second), moves the plate as the PC2
+    does: the cube riding it ends where it ends on the PC2's plate, to the last bit, whether
+    the sequence is named by its pattern or by one of its files."""
+    folder, _, _ = platform_files
+    samples = Animation(str(folder / "plate.pc2"), fps=FPS).cache()
+    _, triangles = plate()
+    for k, points in enumerate(samples.points):
+        write_obj(tmp_path / f"plate.{2 * k + 1:04d}.obj", points, triangles)
+    write_obj(tmp_path / "plate.obj", samples.points[0], triangles)
+    (tmp_path / "plate.pc2").write_bytes((folder / "plate.pc2").read_bytes())
+    head = CUBE.format(dt=1e-3, integrator="symplectic_euler")
+    ends = []
+    for animation in ('file = "plate.pc2"', 'file = "plate.####.obj"\nfps = 48.0',
+                      'file = "plate.0007.obj"\nfps = 48.0'):
+        (tmp_path / "scene.toml").write_text(
+            head + f'[[terrains]]\ntype = "mesh"\nfile = "plate.obj"\n'
+                   f'[terrains.animation]\n{animation}\n')
+        simulation = springsim.Simulation(load_scene(str(tmp_path / "scene.toml")))
+        simulation.advance(0.6)
+        ends.append(simulation.state.positions.copy())
+    assert np.array_equal(ends[0], ends[1]) and np.array_equal(ends[0], ends[2])
+    assert ends[0][:, 1].min() > 0.15   # the plate lifted it (0.21 m by 0.6 s)
+    sequence = Animation(str(tmp_path / "plate.####.obj"), fps=48.0).cache()
+    assert np.array_equal(sequence.times, samples.times)
 
 
 def test_usd_export_moves_the_terrains_with_the_take(platform_files, tmp_path):

@@ -182,8 +182,9 @@ class MeshTerrain(Contact):
         vertices = read_mesh_file(self.file, f"{key}.file").vertices
         self.animation.check_points(len(vertices), f"{key}.animation",
                                     f"the mesh file {self.file}")
-        versions = [(str(path.resolve()), path.stat().st_mtime_ns) for path in
-                    (Path(self.file).expanduser(), Path(self.animation.file).expanduser())]
+        path = Path(self.file).expanduser()
+        versions = [(str(path.resolve()), path.stat().st_mtime_ns),
+                    (self.animation.file, self.animation.version())]
         return _cached_surface(*versions, float(self.animation.fps),
                                float(self.animation.start), float(self.scale),
                                float(self.rotation_degrees), tuple(map(float, self.rotation_axis)),
