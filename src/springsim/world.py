@@ -42,7 +42,7 @@ from ._jit import inline_kernel, kernel
 from .bodies.pins import followed_terrain
 from .motion import POSE, Motion, pack_motions, pose_into
 from .terrains.deforming_mesh import deform, deformed_velocity
-from .terrains import terrain_distance
+from .terrains import still_terrain_distance, terrain_distance
 
 
 def pack_world(terrains, built, offsets) -> dict:
@@ -178,17 +178,22 @@ def terrain_view(model):
 def terrain_at(terrains, t, x0, x1, x2, radius):
     """Signed distance (m) from a particle's surface to terrain t at its current pose, and the
     unit normal (world frame)."""
-    if terrains.motion[t] < 0:
+    if terrains.deforming[t] >= 0:   # a deforming mesh, which has no rigid motion
         return terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
                                 x0, x1, x2, radius)
+    # the others never deform by themselves: the dispatcher without the deforming kinds, whose
+    # kernel inlined beside the others makes every kind's lookup slower
+    if terrains.motion[t] < 0:
+        return still_terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
+                                      x0, x1, x2, radius)
     p = terrains.pose[terrains.motion[t]]
     # y - c, then R^T (y - c) + pivot: the point where the terrain was placed in the scene
     d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
     l0 = p[0] * d0 + p[3] * d1 + p[6] * d2 + p[12]
     l1 = p[1] * d0 + p[4] * d1 + p[7] * d2 + p[13]
     l2 = p[2] * d0 + p[5] * d1 + p[8] * d2 + p[14]
-    phi, m0, m1, m2 = terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
-                                       l0, l1, l2, radius)
+    phi, m0, m1, m2 = still_terrain_distance(terrains.kind[t], terrains.parameters[t],
+                                             terrains.data, l0, l1, l2, radius)
     return (phi, p[0] * m0 + p[1] * m1 + p[2] * m2, p[3] * m0 + p[4] * m1 + p[5] * m2,
             p[6] * m0 + p[7] * m1 + p[8] * m2)
 

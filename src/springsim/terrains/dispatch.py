@@ -61,7 +61,8 @@ def kind_kernel(cls, still_only):
 
 def build_dispatcher(kinds, still_only=False):
     """The dispatcher over ``kinds``; with ``still_only``, the kinds that deform by themselves
-    (``never_still = True``) answer out_of_reach, for the lookups of terrains known to be still."""
+    (``never_still = True``) answer out_of_reach, for the lookups of terrains known not to
+    deform (still, or moving rigidly in world.terrain_at)."""
     source = dispatcher_source(len(kinds))
     # Every kind's kernel is inlined into the dispatcher, and the dispatcher into its callers, at
     # Numba's level (inline="always"): then no call is left in the contact loops, and Numba drops
