@@ -123,7 +123,11 @@ _use_versioned_cache()
 
 
 def kernel(function):
-    """Compile ``function`` as a serial, cached Numba kernel."""
+    """Compile ``function`` as a serial, cached Numba kernel.
+
+    A tuple of arrays built inside a kernel (world.TerrainView) goes only to inline kernels:
+    handed to a kernel like this one, the pair computed right when compiled in the process and
+    wrong when loaded from the cache (tests/test_cache.py caught it; once it crashed)."""
     return njit(cache=True, fastmath=FASTMATH, error_model="numpy")(function)
 
 

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..world import surface_velocity, terrain_at, terrain_view
 
 FREE, CONTACT, PINNED = 0, 1, 2
@@ -63,20 +63,21 @@ def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
     return max(s_n + min(v_n - s_n, 0.0), -max(phi, 0.0) / h)
 
 
-@kernel
-def closest_terrain(model, terrains, x, i, u0, u1, u2, h, in_reach):
+@inline_kernel
+def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
     """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
     normal and the normal velocity; terrain -1 if it reaches none.
 
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
-    start of a step); without, it means ending the step inside (phi + h u_n < 0).
+    start of a step); without, it means ending the step inside (phi + h u_n < 0). ``epsilon``:
+    the terrains' contact bands; ``radius``: the particle's (model.terrain_offset[i]). Inlined,
+    so it takes arrays, not the model: an inline kernel handed the model counts a reference to
+    each of its arrays at every call.
     """
-    epsilon = model.terrain_epsilon
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
-                                     model.terrain_offset[i])
+        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:
@@ -89,8 +90,8 @@ def closest_terrain(model, terrains, x, i, u0, u1, u2, h, in_reach):
     return best, best_phi, nx, ny, nz, best_u_n
 
 
-@kernel
-def make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
+@inline_kernel
+def make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
                  terrain, normal_floor):
     kind[i] = CONTACT
     terrain[i] = t
@@ -98,7 +99,7 @@ def make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal
     s0, s1, s2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
     surface[i, 0], surface[i, 1], surface[i, 2] = s0, s1, s2
     normal_floor[i] = lowest_normal_velocity(phi, v_n, s0 * nx + s1 * ny + s2 * nz, h,
-                                             model.terrain_epsilon[t])
+                                             epsilon[t])
 
 
 @kernel
@@ -107,7 +108,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without."""
-    terrains = terrain_view(model)
+    terrains, epsilon = terrain_view(model), model.terrain_epsilon
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
         kind[i] = FREE
@@ -115,10 +116,10 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
         if model.inv_mass[i] == 0.0:
             kind[i] = PINNED
         else:
-            t, phi, nx, ny, nz, v_n = closest_terrain(model, terrains, x, i, v[i, 0], v[i, 1],
-                                                      v[i, 2], h, True)
+            t, phi, nx, ny, nz, v_n = closest_terrain(terrains, epsilon, model.terrain_offset[i],
+                                                      x, i, v[i, 0], v[i, 1], v[i, 2], h, True)
             if t >= 0:
-                make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
+                make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
                              surface, terrain, normal_floor)
         if kind[i] != CONTACT or terrain[i] != previous:
             friction_damping[i] = 0.0
@@ -259,17 +260,18 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
     all contacts) moved by more than FRICTION_SETTLED of their total."""
     changed = 0
     friction_total = friction_moved = 0.0
-    terrains = terrain_view(model)
+    terrains, epsilon = terrain_view(model), model.terrain_epsilon
     for i in range(x.shape[0]):
         if kind[i] == PINNED:
             continue
         u0, u1, u2 = (v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1],
                       v[i, 2] + dv[i, 2] + ddv[i, 2])   # the velocity at the end of the step
         if kind[i] == FREE:
-            t, phi, nx, ny, nz, _ = closest_terrain(model, terrains, x, i, u0, u1, u2, h, False)
+            t, phi, nx, ny, nz, _ = closest_terrain(terrains, epsilon, model.terrain_offset[i],
+                                                    x, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-                make_contact(model, terrains, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
+                make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
                              surface, terrain, normal_floor)
                 hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
                 changed += 1
