@@ -61,6 +61,43 @@ def test_the_server_holds_the_recorded_positions_of_the_frame_shown(take_path):
         replay.stop()
 
 
+def test_the_pins_and_the_wind_are_recorded_and_drawn_where_they_are(tmp_path):
+    """A cloth held at its corners in a wind that turns from +x to +z: the recording keeps which
+    particles are pinned and the wind's keys, and the browser replay draws a dot on each pinned
+    particle where the frame has it and an arrow along the mean wind at the frame's time."""
+    from springsim import Simulation
+    from springsim.bodies.cloth import Cloth
+    from springsim.recording import record, write_npz
+    from springsim.replay.web import WebReplay
+    from springsim.scene import Scene
+    from springsim.wind import Wind, WindKey
+
+    wind = Wind(keyframes=[WindKey(0.0, (4.0, 0.0, 0.0)), WindKey(0.4, (0.0, 0.0, 4.0))])
+    scene = Scene(bodies=[Cloth(particles_per_edge=6, width=1.0, height=1.0)], terrains=[],
+                  wind=wind, integrator="symplectic_euler", dt=1e-4)
+    simulation = Simulation(scene)
+    pinned = np.flatnonzero(simulation.model.pinned)
+    write_npz(tmp_path / "take.npz", record(simulation, 0.5, 10.0).arrays())
+    take = load_take(tmp_path / "take.npz")
+    assert len(pinned) == 4 and np.array_equal(take.layout.pinned, pinned)
+    assert np.array_equal(take.layout.wind_keys, [[0.0, 4.0, 0.0, 0.0], [0.4, 0.0, 0.0, 4.0]])
+    replay = WebReplay(take, port=free_port())
+    try:
+        handles = {toggle: handle for toggle, handle, _ in replay._parts}
+        for frame, way in ((0, [1.0, 0.0, 0.0]), (2, np.array([1.0, 0.0, 1.0]) / np.sqrt(2)),
+                           (5, [0.0, 0.0, 1.0])):
+            replay._seek(frame)
+            np.testing.assert_allclose(handles["pins"].points, take.positions[frame, pinned],
+                                       atol=1e-6)
+            start, end = np.asarray(handles["wind"].points, float)[0]
+            np.testing.assert_allclose((end - start) / np.linalg.norm(end - start), way,
+                                       atol=1e-6)
+        replay.set_drawn("pins", False)
+        assert not handles["pins"].visible
+    finally:
+        replay.stop()
+
+
 def chromium() -> str:
     found = shutil.which("chromium") or shutil.which("chromium-browser")
     if found is None:

@@ -20,13 +20,16 @@ Arrays (B bodies, T surface triangles in all, E embedded vertices in all, N ball
 | ``embedding_particles``, ``embedding_weights`` | (E, 8) | surfaces.Embedding, stacked |
 | ``ball_particles``, ``ball_radii`` | (N,) | particle numbers, m |
 | ``terrains_toml`` | () str | the terrains as scene-file tables |
+| ``pinned_particles`` | (H,) | the particles a pin holds or moves (drawn by replays) |
+| ``wind_keys`` | (K, 4) | the wind's keys (time, velocity), none without wind (drawn by replays) |
 
 A recording written before these arrays existed (no ``layout_version``) still reads: its one
 ``surface`` array (global particle numbers) becomes one body, with no balls and no terrains, and
-``Layout.legacy`` says so.
+``Layout.legacy`` says so; one written before the pins and the wind were recorded reads with
+none.
 """
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,7 +40,8 @@ from .surfaces import Embedding
 LAYOUT_VERSION = 1
 LAYOUT_KEYS = ("layout_version", "body_names", "body_particles", "body_surface_rows",
                "body_surfaces", "body_embedded", "body_embedding_rows", "embedding_particles",
-               "embedding_weights", "ball_particles", "ball_radii", "terrains_toml")
+               "embedding_weights", "ball_particles", "ball_radii", "terrains_toml",
+               "pinned_particles", "wind_keys")
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,8 @@ class Layout:
     ball_radii: np.ndarray      # (N,) m
     terrains: tuple             # terrain objects (terrains.Plane, ...)
     legacy: bool = False        # read from a recording that had no layout
+    pinned: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))   # (H,)
+    wind_keys: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))    # (K, 4)
 
 
 def layout_arrays(model) -> dict:
@@ -73,7 +79,26 @@ def layout_arrays(model) -> dict:
         "ball_particles": balls,
         "ball_radii": np.asarray(model.arrays.radius, float)[balls],
         "terrains_toml": np.asarray(terrains_toml(model.terrains)),
+        "pinned_particles": pinned_particles(model),
+        "wind_keys": recorded_wind_keys(model),
     }
+
+
+def pinned_particles(model) -> np.ndarray:
+    """The particles a pin holds (no inverse mass) or moves (``pin_particles``), numbered."""
+    mask = np.array(getattr(model, "pinned", np.zeros(model.particle_count, bool)), bool)
+    mask[np.asarray(getattr(model.arrays, "pin_particles", np.zeros(0, np.int64)), np.int64)] = True
+    return np.flatnonzero(mask).astype(np.int64)
+
+
+def recorded_wind_keys(model) -> np.ndarray:
+    """The wind's keys (time, velocity), or none when the scene has no [wind]."""
+    from .wind import ON
+
+    settings = getattr(model.arrays, "wind_settings", None)
+    if settings is None or not settings[ON]:
+        return np.zeros((0, 4))
+    return np.asarray(model.arrays.wind_keys, float)
 
 
 def read_layout(arrays, scene_name: str = "body") -> Layout:
@@ -94,9 +119,13 @@ def read_layout(arrays, scene_name: str = "body") -> Layout:
             embedding = Embedding(particles[rows], weights[rows])
         surface = arrays["body_surfaces"][int(surface_rows[b]):int(surface_rows[b + 1])]
         bodies.append(BodySlice(str(name), int(start), int(stop), surface, embedding))
+    pinned = arrays["pinned_particles"] if "pinned_particles" in arrays else np.zeros(0)
+    wind_keys = arrays["wind_keys"] if "wind_keys" in arrays else np.zeros((0, 4))
     return Layout(tuple(bodies), np.asarray(arrays["ball_particles"], np.int64),
                   np.asarray(arrays["ball_radii"], float),
-                  read_terrains(str(arrays["terrains_toml"])))
+                  read_terrains(str(arrays["terrains_toml"])),
+                  pinned=np.asarray(pinned, np.int64),
+                  wind_keys=np.asarray(wind_keys, float).reshape(-1, 4))
 
 
 def legacy_layout(arrays, scene_name: str) -> Layout:

@@ -13,6 +13,7 @@ import numpy as np
 import polyscope as ps
 
 from ..errors import require
+from ..recording_layout import pinned_particles as layout_pinned_particles
 from ..springs import SpringKind
 from ..surfaces import body_surface
 from ..wind import ON as WIND_ON
@@ -272,27 +273,47 @@ class _ContactDrawing:
 
 
 class _WindDrawing:
-    """An arrow along the mean wind (its keyed velocity; the gusts left out), centred on the top
-    of the bodies at the start (where the camera frames them), a third of their size long
-    whatever the speed: it shows the way the air moves; the speed is in the scene."""
+    """An arrow along the mean wind (WindArrow); ``base`` and ``arrow`` as now drawn."""
 
     def __init__(self, model, positions):
-        low, high = positions.min(axis=0), positions.max(axis=0)
-        self.length = max(float(np.max(high - low)), 0.1) / 3
-        self.centre = np.array([(low[0] + high[0]) / 2, high[1], (low[2] + high[2]) / 2])
-        self.keys = model.arrays.wind_keys
-        self.cloud = ps.register_point_cloud("wind", self.centre[None], color=colors.WIND_COLOR)
-        self.cloud.set_radius(0.02 * self.length, relative=False)
+        self.shape = WindArrow.over(positions, model.arrays.wind_keys)
+        self.cloud = ps.register_point_cloud("wind", self.shape.centre[None],
+                                             color=colors.WIND_COLOR)
+        self.cloud.set_radius(0.02 * self.shape.length, relative=False)
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
+        self.base, self.arrow = self.shape.at(t)
+        self.cloud.update_point_positions(self.base[None])
+        self.cloud.add_vector_quantity("air", self.arrow[None], enabled=True,
+                                       vectortype="ambient", radius=0.05 * self.shape.length,
+                                       color=colors.WIND_COLOR)
+
+
+@dataclass
+class WindArrow:
+    """An arrow along the mean wind (its keyed velocity; the gusts left out), centred on the top
+    of the bodies at the start (where the camera frames them), a third of their size long
+    whatever the speed: it shows the way the air moves; the speed is in the scene. Drawn by the
+    viewer, the replays and the browser replay alike."""
+
+    centre: np.ndarray   # (3,) m
+    length: float        # m
+    keys: np.ndarray     # (K, 4) the wind's keys
+
+    @classmethod
+    def over(cls, positions, keys) -> "WindArrow":
+        low, high = positions.min(axis=0), positions.max(axis=0)
+        centre = np.array([(low[0] + high[0]) / 2, high[1], (low[2] + high[2]) / 2])
+        return cls(centre, max(float(np.max(high - low)), 0.1) / 3, np.asarray(keys, float))
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(base, arrow) at time t: the arrow runs from base to base + arrow (none in still
+        air)."""
         velocity = mean_wind(self.keys, t)
         speed = float(np.linalg.norm(velocity))
-        self.arrow = velocity / speed * self.length if speed > 0 else np.zeros(3)
-        self.base = self.centre - self.arrow / 2
-        self.cloud.update_point_positions(self.base[None])
-        self.cloud.add_vector_quantity("air", self.arrow[None], enabled=True, vectortype="ambient",
-                                       radius=0.05 * self.length, color=colors.WIND_COLOR)
+        arrow = velocity / speed * self.length if speed > 0 else np.zeros(3)
+        return self.centre - arrow / 2, arrow
 
 
 def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
@@ -302,15 +323,15 @@ def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
 
 
 def pinned_particles(model) -> np.ndarray:
-    """Every particle a pin holds or moves: the held ones and the moving or soft ones (none for
-    a recording's model, replay.recorded_model, which keeps no pins)."""
-    mask = np.array(getattr(model, "pinned", np.zeros(model.particle_count, bool)), bool)
-    mask[getattr(model.arrays, "pin_particles", np.zeros(0, np.int64))] = True
+    """(P,) bool: every particle a pin holds or moves (recording_layout.pinned_particles; a
+    recording's model, replay.recorded_model, keeps them in its ``pinned``)."""
+    mask = np.zeros(model.particle_count, bool)
+    mask[layout_pinned_particles(model)] = True
     return mask
 
 
 def has_wind(model) -> bool:
-    """Whether the model has a [wind] table (a recording's model keeps none)."""
+    """Whether the model has a [wind] table (a recording's model keeps its keys)."""
     settings = getattr(model.arrays, "wind_settings", None)
     return settings is not None and bool(settings[WIND_ON])
 

@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import require
 from ..export.geometry import body_pieces, terrain_meshes
 from ..render import colors
-from ..render.drawing import DrawOptions, typical_spacing
+from ..render.drawing import (DrawOptions, WindArrow, has_wind, pinned_particles,
+                               typical_spacing)
 from ..springs import SpringKind
 from .recorded_model import recorded_model
 from .timeline import SPEEDS, Timeline
@@ -82,6 +83,31 @@ class WebReplay:
                                          color=rgb(colors.TERRAIN_COLOR), side="double")
             self._parts.append(("terrains", mesh, None))
         self._add_particles_and_springs(first)
+        self._add_pins_and_wind(first)
+
+    def _add_pins_and_wind(self, first) -> None:
+        """The pinned particles as dark red dots and the mean wind as an arrow, as the viewer
+        draws them (render/drawing.py)."""
+        scene, spacing = self.server.scene, typical_spacing(self.model)
+        held = np.flatnonzero(pinned_particles(self.model))
+        if held.size:
+            pins = scene.add_point_cloud("/pins", first[held], rgb(colors.PIN_COLOR),
+                                         point_size=0.5 * spacing, point_shape="circle")
+            self._parts.append(("pins", pins, lambda x, c=pins, i=held: setattr(
+                c, "points", x[i])))
+        if has_wind(self.model):
+            shape = WindArrow.over(first, self.model.arrays.wind_keys)
+            self.wind = scene.add_arrows("/wind", self.wind_points(shape, 0),
+                                         rgb(colors.WIND_COLOR), shaft_radius=0.03 * shape.length,
+                                         head_radius=0.08 * shape.length,
+                                         head_length=0.2 * shape.length)
+            self._parts.append(("wind", self.wind, lambda x, a=self.wind, w=shape: setattr(
+                a, "points", self.wind_points(w, self.timeline.frame))))
+
+    def wind_points(self, shape, frame: int) -> np.ndarray:
+        """The arrow's (1, 2, 3) start and end at ``frame``'s time."""
+        base, arrow = shape.at(float(self.take.time[frame]))
+        return np.array([[base, base + arrow]], np.float32)
 
     def _add_particles_and_springs(self, first) -> None:
         scene, spacing = self.server.scene, typical_spacing(self.model)
@@ -131,7 +157,8 @@ class WebReplay:
         with gui.add_folder("Draw"):
             present = {SpringKind(k).label for k in set(self.model.spring_kind.tolist())}
             for name in ("surfaces", "particles", *[k.label for k in SpringKind
-                                                     if k.label in present], "balls", "terrains"):
+                                                     if k.label in present], "balls", "terrains",
+                         "pins", "wind"):
                 box = gui.add_checkbox(name, getattr(self.draw, name))
                 box.on_update(lambda event, n=name: self.set_drawn(n, event.target.value))
         energies = recorded_energies(self.take.arrays)
