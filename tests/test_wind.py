@@ -59,3 +59,65 @@ def test_bad_wind_is_one_line_naming_the_key(table, key):
     with pytest.raises(SceneError) as raised:
         scene_from_table({"bodies": [{"type": "balls"}], "wind": table}).validate()
     assert raised.value.key == key
+
+
+def reference_wind_forces(arrays, x, v, t):
+    """wind.add_wind_forces in NumPy, from the module's formulas: the keyed mean wind plus the
+    mean of the gusts at a triangle's corners, relative to the mean of its corners' velocities;
+    1/2 rho C_d A |w_n| w_n n + 1/2 rho C_f A |w_t| w_t, a third to each corner, times its
+    weight; balls 1/2 rho C_d pi r^2 |w| w."""
+    from springsim.render.drawing import mean_wind
+    from springsim.wind import DENSITY, DRAG, FRICTION, STRENGTH
+
+    settings, modes = arrays.wind_settings, arrays.wind_modes
+    mean = mean_wind(arrays.wind_keys, t)
+    speed = np.linalg.norm(mean)
+    size = settings[STRENGTH] * (speed if speed > 0 else 1.0) / math.sqrt(max(len(modes), 1) / 2)
+
+    def air(points):
+        waves = np.sin(points @ modes[:, 3:6].T - modes[:, 6] * t + modes[:, 7])
+        return mean + size * waves @ modes[:, 0:3]
+
+    rho = settings[DENSITY]
+    out = np.zeros_like(x)
+    triangles = arrays.wind_triangles
+    a, b, c = (triangles[:, k] for k in range(3))
+    normal = np.cross(x[b] - x[a], x[c] - x[a])
+    area = 0.5 * np.linalg.norm(normal, axis=1)
+    normal /= 2 * area[:, None]
+    gusted = (air(x[a]) + air(x[b]) + air(x[c])) / 3
+    w = gusted - (v[a] + v[b] + v[c]) / 3
+    w_n = np.sum(w * normal, axis=1)
+    w_t = w - w_n[:, None] * normal
+    force = (0.5 * rho * settings[DRAG] * (area * np.abs(w_n) * w_n)[:, None] * normal
+             + 0.5 * rho * settings[FRICTION] * (area * np.linalg.norm(w_t, axis=1))[:, None] * w_t)
+    for corner in (a, b, c):
+        np.add.at(out, corner, force * arrays.wind_weights[:, None] / 3)
+    for i in arrays.balls:
+        w = air(x[i][None])[0] - v[i]
+        size = 0.5 * rho * settings[DRAG] * math.pi * arrays.radius[i] ** 2
+        out[i] += size * np.linalg.norm(w) * w
+    return out
+
+
+@pytest.mark.parametrize("gusts", [None, Gusts(0.3, 1.0, 4)])
+def test_the_wind_kernel_is_its_formula(gusts):
+    """add_wind_forces against its NumPy reference on a blown, crumpled cloth and a ball, in a
+    wind keyed from +x to +z at a time between the keys, with and without gusts."""
+    from springsim.wind import WindKey, add_wind_forces
+
+    wind = Wind(keyframes=[WindKey(0.0, (5.0, 0.0, 0.0)), WindKey(1.0, (0.0, 1.0, 4.0))],
+                friction=0.05, gusts=gusts)
+    balls = Balls(balls=[Ball(position=(0.0, 1.0, 0.0), radius=0.1, mass=0.05)])
+    scene = Scene(bodies=[Cloth(particles_per_edge=6, width=1.0, height=1.0), balls], wind=wind,
+                  integrator="symplectic_euler", dt=1e-4)
+    sim = springsim.Simulation(scene)
+    rng = np.random.default_rng(3)
+    x = sim.positions + 0.05 * rng.standard_normal(sim.positions.shape)
+    v = rng.standard_normal(x.shape)
+    arrays = sim.model.arrays
+    arrays.clock[2] = 0.37   # the world's time, as move_world sets it
+    out = np.zeros_like(x)
+    add_wind_forces(arrays, x, v, np.ones(1), out)
+    np.testing.assert_allclose(out, reference_wind_forces(arrays, x, v, 0.37), rtol=1e-11,
+                               atol=1e-13)
