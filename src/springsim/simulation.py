@@ -17,6 +17,7 @@ from .integrators import available_threads, get_integrator
 from .model import build_model
 from .scene import Scene, check_bodies_outside_terrains
 from .state import State
+from .substeps import ColliderSubsteps, collider_substeps
 from .surfaces import body_surface
 
 # The most steps one call may take: time advances by steps * dt in float64, exact in whole steps
@@ -78,6 +79,8 @@ class Simulation:
         self.integrator = get_integrator(scene.integrator, **self._integrator_options)
         self.dt = float(scene.dt)
         self.state = State.initial(self.model)
+        self._substeps = {}               # dt -> ColliderSubsteps
+        self.substeps()                   # a motion too fast for any substeps fails here
         self._lists_left = (None, None)   # the pair lists the last step left (State.check)
 
     @property
@@ -116,15 +119,25 @@ class Simulation:
                 f"must be a time > 0 s and at most dt = {self.dt:g} s")
         self._advance(float(seconds), 1)
 
+    def substeps(self, dt: float | None = None) -> ColliderSubsteps:
+        """The substeps each step of ``dt`` (the simulation's) takes so that no moving terrain
+        passes through a particle (substeps.py)."""
+        dt = self.dt if dt is None else float(dt)
+        if dt not in self._substeps:
+            self._substeps[dt] = collider_substeps(self.scene.terrains, dt)
+        return self._substeps[dt]
+
     def _advance(self, dt: float, count: int) -> None:
         self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
+        parts = self.substeps(dt).count
         # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
         with signals.deferred():
-            done, particle = self.integrator.advance(self.model, self.state, dt, count,
-                                                     self.threads)
+            done, particle = self.integrator.advance(self.model, self.state, dt / parts,
+                                                     count * parts, self.threads)
             self._lists_left = (self.state.pairs, self.state.solve_pairs)
-            self.state.time += done * dt
-            self.state.steps += done
+            self.state.time += done * (dt / parts)
+            self.state.steps += done // parts
+        dt = dt / parts
         if particle >= 0:
             v = self.state.velocities[particle]
             with np.errstate(over="ignore", invalid="ignore"):   # inf is the honest answer

@@ -118,6 +118,11 @@ def run(args) -> int:
     if not args.quiet:
         chosen = [(f"bodies.{i} lattice", body.summary())
                   for i, body in enumerate(scene.bodies) if hasattr(body, "summary")]
+        substeps = simulation.substeps()
+        if substeps.count > 1:
+            chosen.append(("collider substeps", f"{substeps.count} a step: terrains."
+                           f"{substeps.terrain} moves up to {substeps.travel:.3g} m a step, "
+                           f"{substeps.thickness:.3g} m thick"))
         print("\n".join(summary_lines(recording, chosen)), flush=True)
     if args.video:
         problem = write_video_of(simulation, recording, args.video)

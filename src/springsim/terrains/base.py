@@ -19,6 +19,7 @@ the kind in lists and menus. The class provides:
 - optionally ``never_still = True``: its surface moves by itself (a point cache), so it is never
   looked up as a still terrain (dispatch.still_terrain_distance).
 """
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,6 +79,17 @@ class Contact:
     def moves(self) -> bool:
         """Whether it is drawn anew as time goes."""
         return self.motion is not None
+
+    def thickness(self) -> float:
+        """The terrain's thinnest part (m): a motion that carries it further than a part of this
+        in one step takes the step in substeps (substeps.py). A half-space, an open mesh and a
+        bowl's wall have no far side to pass a particle through: inf."""
+        return math.inf
+
+    def motion_probes(self) -> np.ndarray:
+        """Points of the terrain as placed (n, 3), whose travel in a step bounds its surface's
+        (substeps.py); none for a terrain of infinite thickness."""
+        return np.zeros((0, 3))
 
     def vertices_at(self, vertices, t: float) -> np.ndarray:
         """Its display mesh's ``vertices`` where they are at time t."""

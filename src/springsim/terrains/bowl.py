@@ -1,5 +1,6 @@
 """The inside of a sphere; particles stay within it: ``phi = R - |x - c|``, normal
 ``(c - x)/|x - c|``."""
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,12 @@ class Bowl(Sphere):
     radius: float = 7.0
 
     distance_kernel = bowl_distance
+
+    def thickness(self) -> float:
+        return math.inf   # its wall has no far side: particles stay inside
+
+    def motion_probes(self) -> np.ndarray:
+        return np.zeros((0, 3))
 
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
         return self.radius - np.linalg.norm(x - np.asarray(self.center, float), axis=-1) - radius

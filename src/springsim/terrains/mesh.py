@@ -35,6 +35,8 @@ from ..animation import Animation
 from .base import Contact, register
 from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
 
+PROBES = 512   # a moving mesh's vertices whose travel bounds its surface's (substeps.py)
+
 BAND_CELLS = 3          # nodes within this many cells of the surface get exact distances
 MARGIN_CELLS = 4        # the grid reaches this many cells beyond the mesh's box
 MAX_NODES = 8_000_000   # 64 MB of float64: the grid's size limit
@@ -156,6 +158,18 @@ class MeshTerrain(Contact):
     def anchor(self) -> tuple:
         return tuple(self.position)   # what a motion turns it about by default
 
+    def thickness(self) -> float:
+        """A closed mesh's smallest box side (a stand-in for its thinnest part); an open one
+        pushes what is behind it back to the side its normals face, as a half-space does: inf."""
+        mesh = self.mesh()
+        if not is_closed(mesh.triangles):
+            return math.inf
+        return float(np.ptp(mesh.vertices, axis=0).min())
+
+    def motion_probes(self) -> np.ndarray:
+        vertices = self.mesh().vertices
+        return vertices[::max(1, len(vertices) // PROBES)]
+
     def validate(self, key: str) -> None:
         self.validate_contact(key)
         validate_placement(self, key)
@@ -249,6 +263,13 @@ class MeshTerrain(Contact):
         box_low, box_high = vertices.min(axis=0), vertices.max(axis=0)
         return np.array([[x, y, z] for x in (box_low[0], box_high[0])
                          for y in (box_low[1], box_high[1]) for z in (box_low[2], box_high[2])])
+
+
+def is_closed(triangles: np.ndarray) -> bool:
+    """Whether every edge is shared by exactly two triangles."""
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(len(counts)) and bool(np.all(counts == 2))
 
 
 @functools.lru_cache(maxsize=8)

@@ -40,6 +40,17 @@ class Sphere(Contact):
     def anchor(self) -> tuple:
         return tuple(self.center)   # what a motion turns it about by default
 
+    def thickness(self) -> float:
+        return 2.0 * float(self.radius)
+
+    def motion_probes(self) -> np.ndarray:
+        """The centre and 14 points of the surface: the axes' ends and the cube diagonals'."""
+        axes = np.vstack([np.eye(3), -np.eye(3),
+                          np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
+                                    for z in (-1, 1)]) / math.sqrt(3)])
+        centre = np.asarray(self.center, float)
+        return np.vstack([centre, centre + float(self.radius) * axes])
+
     def validate(self, key: str) -> None:
         self.validate_contact(key)
         require(np.shape(self.center) == (3,) and is_finite(self.center), f"{key}.center",

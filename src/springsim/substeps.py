@@ -1,0 +1,82 @@
+"""Substeps for fast colliders: no particle passes through a moving terrain within one step.
+
+Contact pushes a particle out of a terrain to the nearest side of its surface. A collider that
+moves further in one step than half its thickness can carry its surface past a particle, which
+then lies nearer the far side and is pushed out there: the collider has passed through it (a
+sphere of 5 cm radius at 10 m/s moves 17 cm in a 1/60 s step). So a step whose terrains would
+move more than SHARE of their thickness is taken as that many substeps of equal length, at every
+integrator, chosen before the run from the motions alone (a motion is a function of time):
+the same scene and step always take the same substeps, so runs stay deterministic and resume
+exactly.
+
+A terrain's travel in a step is the largest distance any of its ``motion_probes`` (points of
+its surface as placed) moves in dt, sampled over the motion's keyframes (a constant velocity
+moves them the same distance at any time). ``thickness()`` is the terrain's thinnest part:
+a sphere's diameter, a closed mesh's smallest box side; a plane, a bowl and an open mesh have
+no far side (inf) and never ask for substeps. A deforming terrain's own motion is not
+substepped: its lookup reaches as far as its vertices move between two samples of its cache
+(terrains/deforming_mesh.py).
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .errors import require
+
+SHARE = 0.4          # of its thickness, the most a collider moves in a substep
+MAX_SUBSTEPS = 1000  # more than this per step is refused: a smaller dt says what is meant
+SAMPLES = 4000       # times sampled over a keyframed motion, at most
+
+
+class ColliderSubsteps(NamedTuple):
+    """The substeps a step of ``dt`` takes, and the terrain that asks for the most."""
+
+    count: int          # substeps per step (1: none)
+    terrain: int        # the terrain's number, -1 if none asks
+    travel: float       # m that terrain moves in one step, at most
+    thickness: float    # m, its thickness
+
+
+def collider_substeps(terrains, dt: float) -> ColliderSubsteps:
+    """The substeps a step of ``dt`` needs for the moving ``terrains`` (module doc)."""
+    worst = ColliderSubsteps(1, -1, 0.0, math.inf)
+    for number, terrain in enumerate(terrains):
+        thickness = terrain.thickness()
+        if getattr(terrain, "motion", None) is None or not math.isfinite(thickness):
+            continue
+        travel = largest_travel(terrain, dt)
+        count = max(1, math.ceil(travel / (SHARE * thickness)))
+        if count > worst.count:
+            worst = ColliderSubsteps(count, number, travel, thickness)
+    require(worst.count <= MAX_SUBSTEPS, f"terrains.{worst.terrain}.motion",
+            f"{worst.travel:.3g} m a step",
+            f"moves {worst.count} times {SHARE:g} of its thickness ({worst.thickness:.3g} m) in "
+            f"one step of dt = {dt:g} s; at most {MAX_SUBSTEPS} substeps are taken: use a "
+            f"smaller dt (about {dt * MAX_SUBSTEPS / worst.count:.2g} s) or a slower motion")
+    return worst
+
+
+def largest_travel(terrain, dt: float) -> float:
+    """The farthest any of the terrain's probes moves in dt (m), over its motion's times."""
+    motion, anchor, probes = terrain.motion, terrain.anchor(), terrain.motion_probes()
+    if not len(probes):
+        return 0.0
+    travel = 0.0
+    for t in sample_times(motion, dt):
+        moved = motion.place(probes, t + dt, anchor) - motion.place(probes, t, anchor)
+        travel = max(travel, float(np.linalg.norm(moved, axis=1).max()))
+    return travel
+
+
+def sample_times(motion, dt: float) -> np.ndarray:
+    """Step starts to look at: one for a constant velocity, else every half step from a step
+    before the first key to the last (no more than SAMPLES), and each key's time, a step
+    before it and the middle between keys (so that no short, fast stretch is missed)."""
+    if not motion.keyframes:
+        return np.zeros(1)
+    keys = np.array([frame.time for frame in motion.keyframes], float)
+    first, last = keys[0] - dt, keys[-1]
+    count = min(SAMPLES, max(2, math.ceil((last - first) / (0.5 * dt)) + 1))
+    return np.unique(np.concatenate([np.linspace(first, last, count), keys, keys - dt,
+                                     (keys[1:] + keys[:-1]) / 2 - dt / 2]))
