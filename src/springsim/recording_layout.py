@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import SceneError, require
+from .bodies.pins import pinned_particles
 from .model import BodySlice
 from .surfaces import Embedding
 
@@ -79,16 +80,9 @@ def layout_arrays(model) -> dict:
         "ball_particles": balls,
         "ball_radii": np.asarray(model.arrays.radius, float)[balls],
         "terrains_toml": np.asarray(terrains_toml(model.terrains)),
-        "pinned_particles": pinned_particles(model),
+        "pinned_particles": pinned_particles(model),   # bodies/pins.py
         "wind_keys": recorded_wind_keys(model),
     }
-
-
-def pinned_particles(model) -> np.ndarray:
-    """The particles a pin holds (no inverse mass) or moves (``pin_particles``), numbered."""
-    mask = np.array(getattr(model, "pinned", np.zeros(model.particle_count, bool)), bool)
-    mask[np.asarray(getattr(model.arrays, "pin_particles", np.zeros(0, np.int64)), np.int64)] = True
-    return np.flatnonzero(mask).astype(np.int64)
 
 
 def recorded_wind_keys(model) -> np.ndarray:

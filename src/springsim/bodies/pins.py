@@ -201,3 +201,10 @@ def _hint(pin: Pin, positions: np.ndarray) -> str:
     low, high = positions.min(axis=0), positions.max(axis=0)
     return (f"the body's particles start within min = {np.round(low, 4).tolist()}, "
             f"max = {np.round(high, 4).tolist()}")
+
+
+def pinned_particles(model) -> np.ndarray:
+    """The particles a pin holds (no inverse mass) or moves (``pin_particles``), numbered."""
+    mask = np.array(getattr(model, "pinned", np.zeros(model.particle_count, bool)), bool)
+    mask[np.asarray(getattr(model.arrays, "pin_particles", np.zeros(0, np.int64)), np.int64)] = True
+    return np.flatnonzero(mask).astype(np.int64)

@@ -12,8 +12,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 import polyscope as ps
 
+from ..bodies.pins import pinned_particles as numbered_pins
 from ..errors import require
-from ..recording_layout import pinned_particles as layout_pinned_particles
 from ..springs import SpringKind
 from ..surfaces import body_surface
 from ..wind import ON as WIND_ON
@@ -323,10 +323,10 @@ def mean_wind(keys: np.ndarray, t: float) -> np.ndarray:
 
 
 def pinned_particles(model) -> np.ndarray:
-    """(P,) bool: every particle a pin holds or moves (recording_layout.pinned_particles; a
+    """(P,) bool: every particle a pin holds or moves (bodies/pins.pinned_particles; a
     recording's model, replay.recorded_model, keeps them in its ``pinned``)."""
     mask = np.zeros(model.particle_count, bool)
-    mask[layout_pinned_particles(model)] = True
+    mask[numbered_pins(model)] = True
     return mask
 
 
