@@ -107,7 +107,7 @@ def test_ctrl_c_during_a_step_from_python_leaves_the_state_whole(monkeypatch):
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
     folder = tmp_path_factory.mktemp("signals")
-    signal_trials.prepare(folder, seconds=8)
+    signal_trials.prepare(folder, seconds=4)
     return folder
 
 
@@ -118,7 +118,7 @@ TRIALS = [(command, signum, delay)
           for signum in (signal.SIGINT, signal.SIGTERM)
           for delay in signal_trials.random_delays(
               command, 2 if command == "run" else 1, seed=f"{command}-{signum}",
-              latest=1.5 if command == "export" else None)]   # an 8 s take exports in 3 s or more
+              latest=1.0 if command == "export" else None)]   # a 4 s take exports in 1.5 s or more
 
 
 @pytest.mark.parametrize("command, signum, delay", TRIALS,

@@ -57,6 +57,9 @@ def on_signal(signum, frame):
         import threading   # loaded already: code called back from C is NumPy's or Numba's
 
         threading.Timer(RESEND_AFTER, _send_again, (signum, _generation)).start()
+        if _depth == 0:   # a block begun before the resend comes takes it over (deferred)
+            global _unanswered
+            _unanswered = signum
     if _depth > 0:
         _pending = _pending or signum
     elif safe is None:
@@ -64,11 +67,13 @@ def on_signal(signum, frame):
 
 
 _generation = 0   # counts signals acted on and blocks begun: a resend from before is stale
+_unanswered = None   # a signal received outside a block, waiting for its resend
 
 
 def _acted_on(signum: int) -> KeyboardInterrupt:
-    global _generation
+    global _generation, _unanswered
     _generation += 1
+    _unanswered = None
     return exception_for(signum)
 
 
@@ -164,6 +169,16 @@ class handled:
         return False
 
 
+def take_over_unanswered() -> None:
+    """A signal that landed outside a block where raising was not safe waits for its resend; a
+    block begun before the resend comes makes it stale, so the block takes the signal as its own
+    (a SIGTERM that landed in an extension's import was lost so, and the command ran on)."""
+    global _pending, _unanswered
+    if _unanswered is not None:
+        _pending = _pending or _unanswered
+        _unanswered = None
+
+
 class deferred:
     """A block of compiled calls: a signal received in it is raised as it ends (module doc).
 
@@ -176,7 +191,8 @@ class deferred:
         self.main = _in_main_thread()
         if self.main:
             if _depth == 0:
-                _generation += 1   # a new block: resends from before it are stale
+                _generation += 1   # a new block: resends from before it are stale, and the
+                take_over_unanswered()   # block acts on their signal as it ends
             self.swapped = (_depth == 0
                             and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
             if self.swapped:
