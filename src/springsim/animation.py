@@ -122,11 +122,10 @@ def cache_files(file: str, key: str) -> list[Path]:
 @functools.lru_cache(maxsize=8)
 def _read(versions: tuple, key: str) -> PointCache:
     paths = [version[0] for version in versions]
-    if paths[0].lower().endswith(".obj"):
+    path = paths[0]
+    if path.lower().endswith(".obj"):
         times, points = _obj_sequence(paths, key)
-        path = paths[0]
     else:
-        path = paths[0]
         raw = Path(path).read_bytes()
         reader = _pc2 if path.lower().endswith(".pc2") else _mdd
         times, points = reader(raw, key, path)

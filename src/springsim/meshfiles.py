@@ -277,3 +277,11 @@ def weld(vertices: np.ndarray, tolerance: float = 1e-9) -> Welded:
     rank = np.empty(len(first), np.int64)
     rank[np.argsort(first, kind="stable")] = np.arange(len(first))
     return Welded(vertices[np.sort(first)], rank[inverse])
+
+
+def is_closed(triangles: np.ndarray) -> bool:
+    """Whether every edge of the triangle mesh is shared by exactly two triangles."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                    triangles[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))

@@ -130,22 +130,22 @@ class Simulation:
     def _advance(self, dt: float, count: int) -> None:
         self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
         parts = self.substeps(dt).count
+        step = dt / parts   # the step the integrator takes (dt itself without substeps)
         # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
         with signals.deferred():
-            done, particle = self.integrator.advance(self.model, self.state, dt / parts,
+            done, particle = self.integrator.advance(self.model, self.state, step,
                                                      count * parts, self.threads)
             self._lists_left = (self.state.pairs, self.state.solve_pairs)
-            self.state.time += done * (dt / parts)
+            self.state.time += done * step
             self.state.steps += done // parts
-        dt = dt / parts
         if particle >= 0:
             v = self.state.velocities[particle]
             with np.errstate(over="ignore", invalid="ignore"):   # inf is the honest answer
                 speed_squared = float(v @ v)
             raise SimulationDiverged(
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
-                dt=dt, particle=particle, position=self.state.positions[particle],
-                speed_squared=speed_squared, suggested_dt=self._step_to_try(dt))
+                dt=step, particle=particle, position=self.state.positions[particle],
+                speed_squared=speed_squared, suggested_dt=self._step_to_try(step))
 
     def _step_to_try(self, dt: float) -> float:
         """A step to suggest after a divergence: half this one, or less where the stiffest

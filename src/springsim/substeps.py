@@ -42,8 +42,10 @@ def collider_substeps(terrains, dt: float) -> ColliderSubsteps:
     """The substeps a step of ``dt`` needs for the moving ``terrains`` (module doc)."""
     worst = ColliderSubsteps(1, -1, 0.0, math.inf)
     for number, terrain in enumerate(terrains):
-        thickness = terrain.thickness()
-        if getattr(terrain, "motion", None) is None or not math.isfinite(thickness):
+        if getattr(terrain, "motion", None) is None:
+            continue
+        thickness = terrain.thickness()   # a mesh's reads its file: only for moving ones
+        if not math.isfinite(thickness):
             continue
         travel = largest_travel(terrain, dt)
         count = max(1, math.ceil(travel / (SHARE * thickness)))

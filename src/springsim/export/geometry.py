@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..render.drawing import is_closed
+from ..meshfiles import is_closed
 from ..render.terrain_meshes import bowl_mesh, plane_basis, sphere_mesh
 from ..terrains import Bowl, MeshTerrain, Plane, Sphere
 

@@ -14,6 +14,7 @@ import polyscope as ps
 
 from ..bodies.pins import pinned_particles as numbered_pins
 from ..errors import require
+from ..meshfiles import is_closed
 from ..springs import SpringKind
 from ..surfaces import body_surface
 from ..wind import ON as WIND_ON
@@ -348,10 +349,3 @@ def typical_spacing(model) -> float:
     x = model.initial_positions
     return max(0.1 * float(np.max(x.max(axis=0) - x.min(axis=0))), 0.05)
 
-
-def is_closed(triangles: np.ndarray) -> bool:
-    """Whether every edge of the triangle mesh is shared by exactly two triangles."""
-    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
-                                    triangles[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(np.all(counts == 2))

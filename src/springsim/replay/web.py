@@ -97,11 +97,11 @@ class WebReplay:
                 c, "points", x[i])))
         if has_wind(self.model):
             shape = WindArrow.over(first, self.model.arrays.wind_keys)
-            self.wind = scene.add_arrows("/wind", self.wind_points(shape, 0),
-                                         rgb(colors.WIND_COLOR), shaft_radius=0.03 * shape.length,
-                                         head_radius=0.08 * shape.length,
-                                         head_length=0.2 * shape.length)
-            self._parts.append(("wind", self.wind, lambda x, a=self.wind, w=shape: setattr(
+            arrow = scene.add_arrows("/wind", self.wind_points(shape, 0), rgb(colors.WIND_COLOR),
+                                     shaft_radius=0.03 * shape.length,
+                                     head_radius=0.08 * shape.length,
+                                     head_length=0.2 * shape.length)
+            self._parts.append(("wind", arrow, lambda x, a=arrow, w=shape: setattr(
                 a, "points", self.wind_points(w, self.timeline.frame))))
 
     def wind_points(self, shape, frame: int) -> np.ndarray:

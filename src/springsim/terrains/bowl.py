@@ -29,9 +29,6 @@ class Bowl(Sphere):
     def thickness(self) -> float:
         return math.inf   # its wall has no far side: particles stay inside
 
-    def motion_probes(self) -> np.ndarray:
-        return np.zeros((0, 3))
-
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
         return self.radius - np.linalg.norm(x - np.asarray(self.center, float), axis=-1) - radius
 

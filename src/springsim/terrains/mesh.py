@@ -29,7 +29,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..errors import SceneError, require
-from ..meshfiles import (TriangleMesh, check_triangles, placed, read_mesh, read_mesh_file,
+from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_mesh, read_mesh_file,
                          validate_placement)
 from ..animation import Animation
 from .base import Contact, register
@@ -263,13 +263,6 @@ class MeshTerrain(Contact):
         box_low, box_high = vertices.min(axis=0), vertices.max(axis=0)
         return np.array([[x, y, z] for x in (box_low[0], box_high[0])
                          for y in (box_low[1], box_high[1]) for z in (box_low[2], box_high[2])])
-
-
-def is_closed(triangles: np.ndarray) -> bool:
-    """Whether every edge is shared by exactly two triangles."""
-    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(len(counts)) and bool(np.all(counts == 2))
 
 
 @functools.lru_cache(maxsize=8)
