@@ -15,6 +15,7 @@ from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
 from .springs import spring_force_factor
 from .wind import add_wind_forces
 from .world import add_pin_forces
+from .attachments import add_attachment_forces
 
 
 @kernel
@@ -83,6 +84,7 @@ def free_accelerations(model, x, v, out, columns):
         for c in range(3):
             out[i, c] = w * (out[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
     add_pin_forces(model, x, v, inv_mass, out)   # soft pins' springs (world.py)
+    add_attachment_forces(model, x, v, inv_mass, out)   # soft attachments (attachments.py)
     add_wind_forces(model, x, v, inv_mass, out)  # the air (wind.py)
 
 

@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .attachments import hold_attachments, pack_attachments
 from .bodies.balls import collision_parameters
 from .collision.shapes.surfaces import surface_contact_arrays
 from .spring_runs import build_spring_runs
@@ -99,6 +100,12 @@ class ModelArrays(NamedTuple):
     sheet_ring_edges: np.ndarray = np.empty((0, 2), np.int32)  # (R, 2) particle numbers
     sheet_boundary: np.ndarray = np.empty((0, 2), np.int64)   # (G, 2) directed along it
     sheet_near_boundary: np.ndarray = np.empty(0, np.int64)   # (N,) particles
+    # Attachments (attachments.py): per bound particle, its stencil (the particle, then its
+    # triangle's corners) and weights (1, -w_a, -w_b, -w_c), and its spring (0 N/m: hard)
+    attachment_nodes: np.ndarray = np.empty((0, 4), np.int64)  # (A, 4) particle numbers
+    attachment_weights: np.ndarray = np.empty((0, 4))          # (A, 4), summing to zero
+    attachment_stiffness: np.ndarray = np.empty(0)             # (A,) N/m
+    attachment_damping: np.ndarray = np.empty(0)               # (A,) N s/m
 
 
 @dataclass(frozen=True)
@@ -178,6 +185,7 @@ def build_model(scene) -> Model:
     springs, groups, kinds = springs[order], groups[order], kinds[order]
     rest_length = np.linalg.norm(positions[springs[:, 0]] - positions[springs[:, 1]], axis=1)
 
+    attached = pack_attachments(getattr(scene, "attachments", ()), built, offsets)
     arrays = ModelArrays(
         inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
         terrain_offset=np.concatenate([b.terrain_offsets if b.terrain_offsets is not None
@@ -191,7 +199,9 @@ def build_model(scene) -> Model:
         **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
         clock=np.zeros(3), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
-        **sheet_arrays(built, offsets), **surface_contact_arrays(scene.bodies, built, offsets))
+        **sheet_arrays(built, offsets),
+        **surface_contact_arrays(scene.bodies, built, offsets, attached["attachment_nodes"]),
+        **attached)
     # Numba compiles a kernel once per layout of its arguments: one Fortran-ordered table (a
     # cloth's triangles) compiled every kernel a second time.
     arrays = ModelArrays(*(np.ascontiguousarray(a) if isinstance(a, np.ndarray) else a
@@ -200,6 +210,9 @@ def build_model(scene) -> Model:
                    for i, (spec, b) in enumerate(zip(scene.bodies, built)))
     velocities = np.concatenate([b.velocities for b in built])
     velocities[pinned] = 0.0
+    # hard attachments hold from the start (the springs' rest lengths are where the bodies
+    # were built): the run starts from a state they allow
+    hold_attachments(arrays, positions, velocities)
     return Model(arrays=arrays, mass=mass, pinned=pinned, spring_kind=kinds, bodies=bodies,
                  initial_positions=positions, initial_velocities=velocities,
                  terrains=tuple(scene.terrains), scene_bodies=tuple(scene.bodies))

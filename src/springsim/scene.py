@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .attachments import Attachment, validate_attachments
 from .collision.shapes.settings import SurfaceContact
 from .bodies.pins import check_follows
 from .errors import is_finite, require
@@ -38,6 +39,8 @@ class Scene:
     drag: float = 0.0                     # viscous drag coefficient, N s/m (f = -drag v)
     implicit: ImplicitSettings = field(default_factory=ImplicitSettings)
     wind: Wind | None = None              # moving air (wind.py); unset: still air, no force
+    # particles of one body bound to another's surface (attachments.py)
+    attachments: list[Attachment] = field(default_factory=list)
 
     def validate(self) -> None:
         from .integrators import integrator_names
@@ -57,6 +60,7 @@ class Scene:
             terrain.validate(f"terrains.{t}")
         for i, body in enumerate(self.bodies):
             check_follows(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
+        validate_attachments(self.attachments, len(self.bodies))
         self.validate_implicit_settings()
         if self.wind is not None:
             self.wind.validate("wind")

@@ -304,8 +304,11 @@ def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
     the scene ran with is always written.
     """
     defaults = Scene() if only_changes else None
+    tables = [name for name in init_fields(Scene) if name not in TYPED_LISTS
+              and isinstance(getattr(scene, name), list)
+              and _unset_table(typing.get_type_hints(Scene).get(name)) is not None]
     lines = [f"{name} = {toml_value(getattr(scene, name))}"
-             for name in init_fields(Scene) if name not in TYPED_LISTS
+             for name in init_fields(Scene) if name not in TYPED_LISTS and name not in tables
              and getattr(scene, name) is not None   # unset (no wind): TOML has no null
              and (name in ("name", "dt") or not _is_default(scene, defaults, name))]
     for list_name, (_, registry) in TYPED_LISTS.items():
@@ -313,6 +316,11 @@ def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
             kind = type_name(item, registry)
             lines += ["", f"[[{list_name}]]", f"type = {toml_value(kind)}"]
             lines += _table_lines(item, list_name, registry[kind]() if only_changes else None)
+    for list_name in tables:   # arrays of tables without a type: [[attachments]]
+        for item in getattr(scene, list_name):
+            lines += ["", f"[[{list_name}]]"]
+            lines += _table_lines(item, list_name,
+                                  _default_instance(type(item)) if only_changes else None)
     return "\n".join(lines) + "\n"
 
 

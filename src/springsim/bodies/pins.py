@@ -82,17 +82,27 @@ class Pin:
                     'must name a terrain as "terrains.N" (N its number, from 0)')
             require(self.motion is None, f"{key}.follow", self.follow,
                     "a pin follows a terrain or has its own motion, not both")
-        given = [name for name in ("particles", "region", "group") if getattr(self, name)]
-        require(len(given) == 1, key, given or "nothing",
-                "a pin chooses its particles in exactly one way: particles = [...], "
-                "region = {min = [...], max = [...]} or group = \"name\"")
-        if self.region is not None:
-            low, high = self.region.min, self.region.max
-            for name, corner in (("min", low), ("max", high)):
-                require(np.shape(corner) == (3,) and is_finite(corner), f"{key}.region.{name}",
-                        corner, "must be three finite numbers (m)")
-            require(bool(np.all(np.asarray(low) <= np.asarray(high))), f"{key}.region",
-                    {"min": low, "max": high}, "needs min <= max on every axis")
+        check_choice(self, key, "a pin", ("particles", "region", "group"))
+
+
+def check_choice(choice, key: str, what: str, ways: tuple) -> None:
+    """``choice`` (a Pin, or anything with its ``particles``, ``region`` and ``group``) chooses
+    its particles in exactly one of ``ways``, and a region is a box. Shared by pins and
+    attachments (attachments.py), so that both choose particles alike."""
+    given = [name for name in ways if getattr(choice, name)]
+    spelled = {"particles": "particles = [...]", "region": "region = {min = [...], max = [...]}",
+               "group": 'group = "name"'}
+    listed = [spelled[name] for name in ways]
+    require(len(given) == 1, key, given or "nothing",
+            f"{what} chooses its particles in exactly one way: " + ", ".join(listed[:-1])
+            + f" or {listed[-1]}")
+    if choice.region is not None:
+        low, high = choice.region.min, choice.region.max
+        for name, corner in (("min", low), ("max", high)):
+            require(np.shape(corner) == (3,) and is_finite(corner), f"{key}.region.{name}",
+                    corner, "must be three finite numbers (m)")
+        require(bool(np.all(np.asarray(low) <= np.asarray(high))), f"{key}.region",
+                {"min": low, "max": high}, "needs min <= max on every axis")
 
 
 def pinned_mask(pins, positions: np.ndarray, groups: dict, key: str) -> np.ndarray:
@@ -102,7 +112,7 @@ def pinned_mask(pins, positions: np.ndarray, groups: dict, key: str) -> np.ndarr
     for p, pin in enumerate(pins):
         chosen = chosen_particles(pin, positions, groups, f"{key}.{p}")
         require(chosen.size > 0, f"{key}.{p}", describe(pin), "chooses no particle; "
-                + _hint(pin, positions))
+                + start_hint(positions))
         if pin.stiffness is None:   # a soft pin's particles keep their mass: a spring holds them
             mask[chosen] = True
     return mask
@@ -192,12 +202,14 @@ def moving_pins(pins, positions: np.ndarray, groups: dict, cache_points=None) ->
 
 
 def describe(pin: Pin):
+    """A choice (a Pin's or an attachment's) as the scene file says it, for an error."""
     if pin.region is not None:
         return {"region": {"min": list(pin.region.min), "max": list(pin.region.max)}}
     return {"particles": pin.particles} if pin.particles else {"group": pin.group}
 
 
-def _hint(pin: Pin, positions: np.ndarray) -> str:
+def start_hint(positions: np.ndarray) -> str:
+    """Where a body's particles start, for an error about a choice that chose none."""
     low, high = positions.min(axis=0), positions.max(axis=0)
     return (f"the body's particles start within min = {np.round(low, 4).tolist()}, "
             f"max = {np.round(high, 4).tolist()}")

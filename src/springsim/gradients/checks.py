@@ -21,6 +21,9 @@ def check_supported(simulation) -> None:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
                          + ", ".join(ADJOINTS))
     arrays = simulation.model.arrays
+    if arrays.attachment_nodes.shape[0]:
+        raise SceneError("attachments", f"{arrays.attachment_nodes.shape[0]} bound particles",
+                         "gradients do not follow attachments yet")
     if arrays.balls.shape[0]:
         raise SceneError("bodies", "balls", "touch by ball contact, which gradients do not "
                          "follow yet")

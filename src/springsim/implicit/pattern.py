@@ -1,8 +1,9 @@
 """The block sparsity pattern of the backward-Euler matrix, fixed when the model is built.
 
 (The integrator stores only the diagonal blocks, ``diagonal_pattern``, and applies the springs'
-blocks from their coefficients: ``SolveLayout`` and spring_terms.py. The full pattern is the
-reference the tests compare it with.)
+blocks from their coefficients: ``SolveLayout`` and spring_terms.py; a model with soft
+attachments stores their few blocks too, ``coupled_pattern``. The full pattern is the reference
+the tests compare it with.)
 
 The matrix has one 3 x 3 block per particle pair that a spring joins (both orders) and one on the
 diagonal per particle. The pattern is block compressed sparse rows (BSR): the blocks of row i are
@@ -53,18 +54,44 @@ def diagonal_pattern(count: int) -> BlockPattern:
                         diagonal_slot=diagonal, spring_slots=np.empty((0, 4), np.int64))
 
 
+def coupled_pattern(count: int, nodes: np.ndarray) -> tuple[BlockPattern, np.ndarray]:
+    """The diagonal blocks and those that couple every two particles of a row of ``nodes``
+    (A, 4): a soft attachment's stencil (attachments.py), whose blocks are few and are stored.
+    Returns the pattern and (A, 4, 4) each row's slots (i, j)."""
+    first = np.repeat(nodes, nodes.shape[1], axis=1).reshape(-1)
+    second = np.tile(nodes, (1, nodes.shape[1])).reshape(-1)
+    diagonal = np.arange(count, dtype=np.int64)
+    keys = np.unique(np.concatenate([diagonal * count + diagonal, first * count + second]))
+    row_of, column = np.divmod(keys, count)
+    row_start = np.searchsorted(row_of, np.arange(count + 1)).astype(np.int64)
+    pattern = BlockPattern(row_start=row_start, column=column.astype(np.int64),
+                           diagonal_slot=np.searchsorted(keys, diagonal * count + diagonal)
+                           .astype(np.int64), spring_slots=np.empty((0, 4), np.int64))
+    slots = np.searchsorted(keys, first * count + second).astype(np.int64)
+    return pattern, slots.reshape(len(nodes), nodes.shape[1], nodes.shape[1])
+
+
 class SolveLayout(NamedTuple):
     """What implicit_euler's solve needs of a model, built once: the pattern of the stored
-    (diagonal) blocks, and the springs' layout for their terms (spring_terms.py)."""
+    blocks (the diagonal, and the blocks of the soft attachments), the springs' layout for their
+    terms (spring_terms.py), and where each attachment's blocks are."""
     diagonal: BlockPattern
     runs: np.ndarray          # (R, 5) the model's spring runs (spring_runs.py)
     run_entries: int          # places in the runs, holes included
     loose_pairs: np.ndarray   # (L, 2) int64 the particles of each loose spring
+    attachment_slots: np.ndarray   # (A, 4, 4) int64: slots of the blocks (i, j) of each
+                                   # soft attachment's particles (-1: a hard one, none)
 
 
 def build_solve_layout(arrays) -> SolveLayout:
-    return SolveLayout(diagonal=diagonal_pattern(len(arrays.inv_mass)),
-                       runs=arrays.spring_runs.astype(np.int64),
+    count = len(arrays.inv_mass)
+    soft = arrays.attachment_stiffness > 0.0
+    slots = np.full((len(soft), 4, 4), -1, np.int64)
+    if soft.any():
+        diagonal, slots[soft] = coupled_pattern(count, arrays.attachment_nodes[soft])
+    else:   # the plain diagonal, whose product cg.search_product takes with the springs'
+        diagonal = diagonal_pattern(count)
+    return SolveLayout(diagonal=diagonal, runs=arrays.spring_runs.astype(np.int64),
                        run_entries=len(arrays.run_rest_length),
                        loose_pairs=arrays.springs[arrays.loose_springs].astype(np.int64)
-                       .reshape(-1, 2))
+                       .reshape(-1, 2), attachment_slots=slots)

@@ -37,6 +37,7 @@ import numpy as np
 from numba import prange
 
 from .._jit import inline_kernel, kernel
+from ..attachments import hold_attachments
 from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
@@ -167,12 +168,14 @@ def is_diverged(vx, vy, vz, position):
 
 @kernel
 def collide(model, x, v, start, pairs, h):
-    """Everything contact does after the integrator's update: terrain impacts (with the
+    """Everything contact does after the integrator's update (with the moving pins on their
+    paths and the hard attachments held first): terrain impacts (with the
     terrains where they are at the step's end), then body-body contact (balls and surfaces in
     one set, from the step's ``start`` positions and the surface pair list:
     collision/pipeline.py). Returns the pair list for the next step."""
     move_world(model, step_time(model) + h)
     place_pins(model, x, v)   # moving pins exactly on their paths at the step's end
+    hold_attachments(model, x, v)   # hard attachments on their triangles (attachments.py)
     resolve_terrain_impacts(model, x, v)
     return resolve_contacts(model, x, v, start, pairs)
 

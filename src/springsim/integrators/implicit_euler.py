@@ -35,6 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import kernel
+from ..attachments import add_attachment_forces, add_attachment_jacobian
 from ..collision.ccd.crossing_check import MOST_HALVINGS, carried_through
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, any_self_collision, grown_own_pairs,
@@ -198,6 +199,7 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
                work.rhs)
     add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)
+    add_attachment_jacobian(model, layout.attachment_slots, h, first, v, work.blocks, work.rhs)
     add_wind_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.blocks)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
     work.ddv[:] = 0.0
@@ -224,6 +226,7 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
             external = (m * model.gravity[c] if w > 0.0 else 0.0) - model.drag[i] * v_k[i, c]
             rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
     add_pin_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft pins, at the step's end
+    add_attachment_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft attachments, too
     add_wind_forces(model, x_k, v_k, np.full(1, h), rhs)  # the air, at the step's end
     if first:
         add_stiffness_product(model, x, v, h * h, rhs)

@@ -15,15 +15,18 @@ from ..pair_lists.unfolded_sheet import no_sheet, unfolded_sheet_arrays
 from .settings import SurfaceContact
 
 
-def surface_contact_arrays(specs, built, offsets) -> dict:
+def surface_contact_arrays(specs, built, offsets, joined=np.empty((0, 4), np.int64)) -> dict:
     """The ModelArrays entries of body-body contact (model.ModelArrays documents them).
 
     Contact tells bodies apart by ``particle_body``, which numbers *contact bodies*: each
     connected piece of a body (particles joined by springs or surface edges) is one, so that the
     separate parts of a mesh body, or two panels in one cloth file, collide with each other as
-    two bodies would; they share their body's settings."""
+    two bodies would; they share their body's settings. Pieces that an attachment joins
+    (``joined``: rows of particle numbers, attachments.py) are one contact body: a seam, where
+    the two surfaces meet, is not a contact."""
     settings = [spec if isinstance(spec, SurfaceContact) else None for spec in specs]
-    particle_body, owner = contact_bodies(settings, built, offsets)
+    particle_body, owner = joined_contact_bodies(*contact_bodies(settings, built, offsets),
+                                                 joined)
     triangles = [collision_triangles(b) + start if s is not None else np.empty((0, 3), np.int64)
                  for s, b, start in zip(settings, built, offsets)]
     body_touches = np.array([s is not None and len(t) > 0 for s, t in zip(settings, triangles)])
@@ -80,6 +83,25 @@ def contact_bodies(settings, built, offsets) -> tuple[np.ndarray, np.ndarray]:
         owner += [b] * pieces
     particle_body = np.concatenate(labels) if labels else np.empty(0, np.int64)
     return particle_body, np.asarray(owner, np.int64)
+
+
+def joined_contact_bodies(particle_body, owner, joined) -> tuple[np.ndarray, np.ndarray]:
+    """``particle_body`` and ``owner`` (contact_bodies) with the contact bodies that a row of
+    ``joined`` touches made one, numbered in the order of their lowest old number and owned
+    by that one's body."""
+    if len(joined) == 0:
+        return particle_body, owner
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pieces = particle_body[joined]                       # (A, 4) contact bodies
+    first = np.repeat(pieces[:, :1], pieces.shape[1] - 1, axis=1).ravel()
+    graph = coo_matrix((np.ones(len(first)), (first, pieces[:, 1:].ravel())),
+                       shape=(len(owner), len(owner)))
+    count, label = connected_components(graph, directed=False)   # labels by lowest member
+    lowest = np.full(count, len(owner), np.int64)
+    np.minimum.at(lowest, label, np.arange(len(owner)))
+    return label.astype(np.int64)[particle_body], owner[lowest]
 
 
 def neighbour_arrays(edges: np.ndarray, particle_count: int) -> dict:
