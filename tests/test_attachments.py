@@ -22,9 +22,10 @@ SEAM = Region(min=(-1.0, -0.1, 0.49), max=(1.0, 0.1, 0.51))   # the second panel
 
 def two_panels(stiffness=None, damping=0.0, **second):
     """Two 3 x 3 panels, 1 m wide, the second's -z edge on the first's +z edge, stitched."""
-    first = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none")
+    first = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
+                  self_collision=False)
     other = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
-                  position=(0.0, 0.0, 1.0), **second)
+                  self_collision=False, position=(0.0, 0.0, 1.0), **second)
     stitch = Attachment(body=1, to=0, region=SEAM, stiffness=stiffness, damping=damping)
     return [first, other], [stitch]
 
@@ -65,8 +66,9 @@ def test_a_hard_binding_is_on_its_point_at_every_step(integrator):
     """One particle of a small panel bound to the middle of a triangle of a falling, spinning
     panel: exactly on its barycentric point after every step, from the start."""
     base = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
-                 velocity=(0.0, 0.5, 0.0))
+                 self_collision=False, velocity=(0.0, 0.5, 0.0))
     flap = Cloth(particles_per_edge=2, width=0.2, height=0.2, pinned="none",
+                 self_collision=False, bend=SpringParameters(0.0, 0.0),
                  position=(0.27, 0.03, 0.22))
     scene = Scene(bodies=[base, flap], attachments=[Attachment(body=1, to=0, particles=[0])],
                   integrator=integrator, dt=STEPS[integrator])
@@ -86,8 +88,10 @@ def test_a_soft_binding_stretches_by_m_g_over_k(integrator):
     """A light panel under a pinned one, each particle on a soft binding of k = 100 N/m: it
     sags by m g / k (its own springs unstretched, the pinned panel unmoved)."""
     holder = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
+                   self_collision=False,
                    pins=[Pin(region=Region(min=(-1, -1, -1), max=(1, 1, 1)))])
     weight = Cloth(particles_per_edge=2, width=0.4, height=0.4, pinned="none",
+                   self_collision=False,
                    bend=SpringParameters(0.0, 0.0), particle_mass=0.1)
     bind = Attachment(body=1, to=0, particles=[0, 1, 2, 3], stiffness=100.0, damping=2.0)
     scene = Scene(bodies=[holder, weight], attachments=[bind], integrator=integrator,

@@ -45,7 +45,11 @@ def surface_contact_arrays(specs, built, offsets, joined=np.empty((0, 4), np.int
         return np.array(values, dtype=type(default))[owner]
 
     all_edges = (np.concatenate(edges) if edges else np.empty((0, 2), np.int64)).astype(np.int64)
-    neighbourhood = neighbour_arrays(all_edges, len(particle_body))
+    # a bound particle and its triangle's corners are neighbours too: a body that collides
+    # with itself does not push a seam apart
+    bound = np.asarray(joined, np.int64)
+    links = np.column_stack([np.repeat(bound[:, 0], 3), bound[:, 1:].ravel()])
+    neighbourhood = neighbour_arrays(np.concatenate([all_edges, links]), len(particle_body))
     # one self-colliding sheet: the pair search may be spared where it lies unfolded
     sheet = (unfolded_sheet_arrays(all_triangles, len(particle_body),
                                    neighbourhood["neighbour_start"], neighbourhood["neighbours"])
