@@ -59,6 +59,23 @@ NOTES = {
     "scene/*/wind": ("", "moving air: `velocity` or `keyframes`, `density`, `drag`, "
                          "`friction`, `gusts` ([Scene files](../scene-files.md#wind))"),
     "scene/*/implicit": ("", "settings of `implicit_euler`, checked whatever the integrator"),
+    "scene/*/attachments": ("", "the `[[attachments]]` tables: particles of one body bound to "
+                                "another body's surface, hard or soft "
+                                "([Scene files](../scene-files.md#attachments))"),
+    "scene/*/attachments.N.body": ("", "the number of the body (from 0) whose particles are "
+                                       "bound"),
+    "scene/*/attachments.N.to": ("", "the number of another body, whose surface triangles "
+                                     "receive them"),
+    "scene/*/attachments.N.particles": ("", "particle numbers of `body` to bind"),
+    "scene/*/attachments.N.region": ("", "a box; the particles of `body` that start inside it "
+                                         "are bound"),
+    "scene/*/attachments.N.region.min": ("m", "the box's lowest corner"),
+    "scene/*/attachments.N.region.max": ("m", "the box's highest corner"),
+    "scene/*/attachments.N.distance": ("m", "the farthest a chosen particle may start from the "
+                                            "surface of `to`"),
+    "scene/*/attachments.N.stiffness": ("N/m", "a soft attachment: a spring of zero length to "
+                                               "the triangle's point; left out, a hard one"),
+    "scene/*/attachments.N.damping": ("N s/m", "a soft attachment's damper"),
     "scene/*/implicit.newton_iterations": ("", "linearized solves per step (1 is Baraff and "
                                                "Witkin's step)"),
     "scene/*/implicit.cg_tolerance": ("", "relative residual at which each conjugate-gradient "
