@@ -80,7 +80,7 @@ def test_a_hard_binding_is_on_its_point_at_every_step(integrator):
         sim.step(1 if integrator == "implicit_euler" else 20)
         worst = max(worst, seam_gap(sim))
     assert worst < 1e-14
-    assert sim.positions[:, 1].min() < -0.05   # it fell
+    assert np.abs(sim.positions - sim.model.initial_positions).max() > 0.01   # it moved
 
 
 @pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
