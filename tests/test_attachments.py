@@ -21,11 +21,12 @@ SEAM = Region(min=(-1.0, -0.1, 0.49), max=(1.0, 0.1, 0.51))   # the second panel
 
 
 def two_panels(stiffness=None, damping=0.0, **second):
-    """Two 3 x 3 panels, 1 m wide, the second's -z edge on the first's +z edge, stitched."""
+    """Two 3 x 3 panels, 1 m wide, the second's -z edge on the first's +z edge, stitched;
+    without drag (a cloth's own would take momentum away)."""
     first = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
-                  self_collision=False)
+                  self_collision=False, drag=0.0)
     other = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
-                  self_collision=False, position=(0.0, 0.0, 1.0), **second)
+                  self_collision=False, drag=0.0, position=(0.0, 0.0, 1.0), **second)
     stitch = Attachment(body=1, to=0, region=SEAM, stiffness=stiffness, damping=damping)
     return [first, other], [stitch]
 
