@@ -3,7 +3,7 @@ sheet at two resolutions (issue bars: build a 70,000-triangle cloth in under 5 s
 the grid cloth of the same particle count, within 10%; a hanging cloth's sag at 50 x 50 and
 100 x 100 particles within 5%).
 
-    .venv/bin/python benchmarks/cloth_mesh.py [--part build,speed,sag] [--repeats 3]
+    .venv/bin/python benchmarks/cloth_mesh.py [--part build,speed,sag,orders] [--repeats 3]
 
 - build: a round tablecloth of about 35,000 vertices and 70,000 triangles (a Delaunay
   triangulation of a jittered disk, written as an OBJ with texture coordinates), built into a
@@ -12,6 +12,10 @@ the grid cloth of the same particle count, within 10%; a hanging cloth's sag at 
   of an irregular triangle mesh with the same particle count, measured alternately (the machine's
   speed drifts), under rk4 (dt 1e-4) and implicit_euler (dt 1/60); ratios mesh / grid per round,
   and each cloth's spring layout (runs, holes in them, loose springs).
+- orders: the spring force loop (forces.spring_forces) on the irregular disk with its vertices
+  numbered in other orders (the file's rings; reverse Cuthill-McKee; scan lines of one grid
+  spacing, and the same turning back every other line; random), against the grid cloth: what a
+  renumbering at build could win (each order's runs, holes and loose springs, spring_runs.py).
 - sag: a 1 m square cloth of a soft material hanging from its top edge, to rest under
   implicit_euler; the drop of its bottom edge below its pinned edge at 50 x 50 and 100 x 100.
 """
@@ -169,12 +173,69 @@ def part_sag(folder: Path, repeats: int) -> dict:
             "stretch_m": {n: s - 1.0 for n, s in sags.items()}}
 
 
+def disk_orders(vertices) -> dict:
+    """Numberings of the disk's vertices (order[new] = old) that part_orders compares."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    _, triangles = disk_mesh(len(vertices), radius=2.0)
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    count = len(vertices)
+    adjacency = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                           shape=(count, count)).tocsr()
+    line = np.floor((vertices[:, 2] - vertices[:, 2].min()) / (4.0 / 100)).astype(int)
+    return {"file (rings)": np.arange(count),
+            "reverse Cuthill-McKee": reverse_cuthill_mckee(adjacency + adjacency.T,
+                                                           symmetric_mode=True),
+            "scan lines": np.lexsort((vertices[:, 0], line)),
+            "scan lines, turning": np.lexsort((np.where(line % 2 == 0, vertices[:, 0],
+                                                        -vertices[:, 0]), line)),
+            "random": np.random.default_rng(0).permutation(count)}
+
+
+def part_orders(folder: Path, repeats: int) -> dict:
+    from numba import njit
+
+    from springsim.bodies.cloth import Cloth
+    from springsim.forces import force_columns, spring_forces
+
+    @njit
+    def spring_loop(arrays, x, v, columns, out):
+        spring_forces(arrays, x, v, columns, out)
+
+    n = 100
+    vertices, triangles = disk_mesh(n * n, radius=2.0)
+    cloths = {"grid": Cloth(particles_per_edge=n, width=4.0, height=4.0)}
+    for name, order in disk_orders(vertices).items():
+        new_number = np.empty(len(order), np.int64)
+        new_number[order] = np.arange(len(order))
+        path = write_obj(folder / f"disk-{len(cloths)}.obj", vertices[order],
+                         new_number[triangles])
+        cloths[name] = Cloth(file=str(path))
+    work = {}
+    for name, cloth in cloths.items():
+        simulation = simulation_of(cloth, "rk4", 1e-4)
+        arrays, x = simulation.model.arrays, simulation.positions.copy()
+        v = np.random.default_rng(1).normal(0.0, 1e-2, x.shape)
+        work[name] = (arrays, x, v, force_columns(x), np.empty_like(x))
+        spring_loop(*work[name])
+    micros = {name: [] for name in cloths}
+    for _ in range(repeats):
+        for name, arguments in work.items():
+            start = time.perf_counter()
+            for _ in range(200):
+                spring_loop(*arguments)
+            micros[name].append((time.perf_counter() - start) / 200 * 1e6)
+    return {name: {"spring_loop_us": micros[name], "runs_holes_loose": run_layout(work[name][0])}
+            for name in cloths}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--part", default="build,speed,sag")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    parts = {"build": part_build, "speed": part_speed, "sag": part_sag}
+    parts = {"build": part_build, "speed": part_speed, "sag": part_sag, "orders": part_orders}
     with tempfile.TemporaryDirectory() as folder:
         for name in args.part.split(","):
             result = parts[name](Path(folder), args.repeats)
@@ -187,6 +248,11 @@ def main() -> None:
                     for mesh, ratios in row["ratio_to_grid"].items():
                         print(f"speed {integrator} {mesh} / grid: {min(ratios):.3f}-"
                               f"{max(ratios):.3f} (median {statistics.median(ratios):.3f})")
+            if name == "orders":
+                for order, row in result.items():
+                    runs, holes, loose = row["runs_holes_loose"]
+                    print(f"orders {order}: {statistics.median(row['spring_loop_us']):.0f} us "
+                          f"a force loop; {runs} runs, {holes} holes, {loose} loose springs")
             if name == "sag":
                 print(f"sag: 50 x 50 {result['sag_m'][50]:.4f} m, 100 x 100 "
                       f"{result['sag_m'][100]:.4f} m, differ by "
