@@ -173,12 +173,11 @@ def part_sag(folder: Path, repeats: int) -> dict:
             "stretch_m": {n: s - 1.0 for n, s in sags.items()}}
 
 
-def disk_orders(vertices) -> dict:
+def disk_orders(vertices, triangles) -> dict:
     """Numberings of the disk's vertices (order[new] = old) that part_orders compares."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-    _, triangles = disk_mesh(len(vertices), radius=2.0)
     edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
     count = len(vertices)
     adjacency = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
@@ -206,7 +205,7 @@ def part_orders(folder: Path, repeats: int) -> dict:
     n = 100
     vertices, triangles = disk_mesh(n * n, radius=2.0)
     cloths = {"grid": Cloth(particles_per_edge=n, width=4.0, height=4.0)}
-    for name, order in disk_orders(vertices).items():
+    for name, order in disk_orders(vertices, triangles).items():
         new_number = np.empty(len(order), np.int64)
         new_number[order] = np.arange(len(order))
         path = write_obj(folder / f"disk-{len(cloths)}.obj", vertices[order],

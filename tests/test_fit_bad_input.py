@@ -72,12 +72,14 @@ def test_a_file_that_is_no_take(capsys, tmp_path, scene_file):
 
 
 def test_a_marker_far_from_every_particle(capsys, tmp_path, scene_file):
-    observed = markers(tmp_path / "m.csv", "time,marker,x,y,z\n0.0,hand,5.0,5.0,5.0\n0.1,hand,5.0,5.0,5.0\n")
+    observed = markers(tmp_path / "m.csv",
+                       "time,marker,x,y,z\n0.0,hand,5.0,5.0,5.0\n0.1,hand,5.0,5.0,5.0\n")
     refused(capsys, tmp_path, scene_file, observed, ["marker", "hand", "matches no particle"])
 
 
 def test_a_marker_index_past_the_last_particle(capsys, tmp_path, scene_file):
-    observed = markers(tmp_path / "m.csv", "time,marker,x,y,z\n0.0,27,0.0,1.5,0.0\n0.1,27,0.0,1.5,0.0\n")
+    observed = markers(tmp_path / "m.csv",
+                       "time,marker,x,y,z\n0.0,27,0.0,1.5,0.0\n0.1,27,0.0,1.5,0.0\n")
     refused(capsys, tmp_path, scene_file, observed,
             ["marker", "27", "a particle number from 0 to 26"], "--match", "index")
 

@@ -29,8 +29,8 @@ import numpy as np
 
 from .._jit import kernel
 from ..errors import SceneError, require
-from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_mesh, read_mesh_file,
-                         validate_placement)
+from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_mesh,
+                         read_mesh_file, validate_placement)
 from ..animation import Animation
 from .base import Contact, register
 from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
