@@ -81,6 +81,8 @@ NOTES = {
     "scene/*/implicit.cg_tolerance": ("", "relative residual at which each conjugate-gradient "
                                           "solve stops"),
     "scene/*/implicit.cg_max_iterations": ("", "most conjugate-gradient iterations per solve"),
+    "scene/*/implicit.preconditioner": ("", "\"two_level\" (block Jacobi and a coarse space of "
+                                            "aggregates) or \"block_jacobi\" alone"),
     "*/*/type": ("", "which kind of body or terrain the table describes"),
     "bodies/*/thickness": ("m", "how far the surface is kept from other surfaces (a pair keeps "
                                 "the mean of its two bodies' thicknesses)"),

@@ -24,6 +24,7 @@ class ImplicitSettings:
     newton_iterations: int = 1        # linearized solves per step (1: Baraff-Witkin)
     cg_tolerance: float = 1e-5        # relative residual of each conjugate-gradient solve
     cg_max_iterations: int = 500
+    preconditioner: str = "two_level"  # or "block_jacobi" (implicit/coarse.py)
 
 
 @dataclass

@@ -40,7 +40,7 @@ class ForwardSolver:
         from ..implicit.spring_terms import spring_terms_like
 
         self.arrays = model.arrays
-        self.layout = layout = integrator.pattern(model)
+        self.layout = layout = integrator.solve_layout(model)
         count = model.particle_count
         x = np.zeros((count, 3))
         self.blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
@@ -67,7 +67,7 @@ class ForwardSolver:
         u = np.zeros_like(rhs)
         r, s, c, q = self.work
         done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, self.contacts,
-                             np.ascontiguousarray(rhs), self.kind, self.normal, u, self.tolerance,
+                             self.layout.coarse, np.ascontiguousarray(rhs), self.kind, self.normal, u, self.tolerance,
                              self.max_iterations, 0.0, r, s, c, q)
         self.iterations += done
         return u

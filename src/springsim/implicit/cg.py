@@ -18,6 +18,9 @@ solve starts at its answer (a held contact, whose friction damper cancels the lo
 surface). The integrator also restores the constrained components after each solve
 (``constraints.hold_all_constrained``).
 
+A solve that block Jacobi does not finish in TWO_LEVEL_AFTER iterations adds a coarse space of
+aggregates to the preconditioner (coarse.py says why and how) and goes on from where it is.
+
 Ball-particle contacts (penalty.py) are not in the fixed block pattern: ``system_multiply``
 adds their product to the assembled matrix's, and the Jacobi preconditioner their diagonal.
 ``filtered_cg`` is the solve without them.
@@ -38,6 +41,7 @@ import numpy as np
 from .._jit import kernel
 from ..collision.response.penalty import add_contact_blocks, add_contact_product
 from ..collision.contact_sets.solve import no_contacts
+from .coarse import CoarseSpace, add_coarse_correction, coarse_factor
 from .constraints import FREE, filter_constrained, filtered
 from .jacobian import block_multiply
 from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
@@ -45,6 +49,10 @@ from .spring_terms import (add_loose_products, add_run_products, add_spring_prod
 
 # N s: a reference below this is zero (nothing to solve); its square would underflow the goal
 MIN_REFERENCE = 1e-150
+# block-Jacobi iterations after which a solve that has not converged builds its coarse space
+# (coarse.py) and goes on two-level: a solve that converges sooner never pays for building it,
+# which costs about what ten iterations do (benchmarks/preconditioner.py)
+TWO_LEVEL_AFTER = 25
 
 
 @kernel
@@ -96,17 +104,20 @@ def precondition(inverse, r, out):
 @kernel
 def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, reference_norm,
                 r, s, c, q):
-    """``contact_cg`` for the assembled matrix alone (no ball-particle contacts)."""
-    return contact_cg(pattern, blocks, no_spring_terms(), no_contacts(), b, kind, normal, u,
+    """``contact_cg`` for the assembled matrix alone (no ball-particle contacts, no coarse
+    space)."""
+    return contact_cg(pattern, blocks, no_spring_terms(), no_contacts(),
+                      CoarseSpace(np.full(u.shape[0], -1, np.int64), 0, 0), b, kind, normal, u,
                       tolerance, max_iterations, reference_norm, r, s, c, q)
 
 
 @kernel
-def contact_cg(pattern, blocks, terms, contacts, b, kind, normal, u, tolerance, max_iterations,
-               reference_norm, r, s, c, q):
+def contact_cg(pattern, blocks, terms, contacts, coarse, b, kind, normal, u, tolerance,
+               max_iterations, reference_norm, r, s, c, q):
     """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass), A the
     stored blocks plus the springs' ``terms`` (spring_terms.py) and the active ``contacts``
-    (penalty.py).
+    (penalty.py), preconditioned by block Jacobi, and after TWO_LEVEL_AFTER iterations also
+    by the ``coarse`` space (coarse.py) if it has aggregates.
 
     The reference is ``reference_norm`` if positive, else the larger of the starting residual
     |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. r, s, c, q are work arrays
@@ -125,17 +136,29 @@ def contact_cg(pattern, blocks, terms, contacts, b, kind, normal, u, tolerance, 
     goal = (tolerance * reference) ** 2
     precondition(inverse, r, s)
     filter_constrained(kind, normal, s)
+    delta = dot(r, s)
     c[:] = s
     beta = 0.0   # the first direction is s itself
-    delta = dot(r, s)
+    factor, coarse_work, two_level = np.zeros((0, 0)), np.zeros(0), False
     for iteration in range(max_iterations):
         if not residual_squared > goal:   # also stops on NaN, which the divergence check reports
             return iteration, reference
+        if iteration == TWO_LEVEL_AFTER and coarse.count > 0:
+            factor = coarse_factor(coarse, pattern, blocks, terms, kind, normal)
+            two_level = factor.shape[0] > 0
+            if two_level:   # start again from u, along the two-level preconditioned residual
+                coarse_work = np.zeros(factor.shape[0])
+                precondition(inverse, r, s)
+                filter_constrained(kind, normal, s)
+                delta = add_coarse_correction(coarse, factor, kind, normal, r, s, coarse_work)
+                beta = 0.0
         curvature = search_product(pattern, blocks, terms, contacts, kind, normal, s, beta, c, q)
         if not curvature > 0.0:
             return iteration, reference
         delta_new, residual_squared = cg_update(kind, normal, inverse, delta / curvature, c, q,
                                                 u, r, s)
+        if two_level:
+            delta_new = add_coarse_correction(coarse, factor, kind, normal, r, s, coarse_work)
         beta = delta_new / delta
         delta = delta_new
     return max_iterations, reference

@@ -14,6 +14,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..springs import SpringKind
+from .coarse import CoarseSpace, build_coarse_space
+
 
 class BlockPattern(NamedTuple):
     row_start: np.ndarray       # (P + 1,) int64
@@ -81,10 +84,15 @@ class SolveLayout(NamedTuple):
     loose_pairs: np.ndarray   # (L, 2) int64 the particles of each loose spring
     attachment_slots: np.ndarray   # (A, 4, 4) int64: slots of the blocks (i, j) of each
                                    # soft attachment's particles (-1: a hard one, none)
+    coarse: CoarseSpace       # the two-level preconditioner's aggregates (coarse.py)
 
 
-def build_solve_layout(arrays) -> SolveLayout:
+def build_solve_layout(arrays, spring_kind=None) -> SolveLayout:
+    """The layout of a model's ``arrays``; ``spring_kind`` (Model.spring_kind) lets the coarse
+    space grow its aggregates along the structural and shear springs alone (coarse.py)."""
     count = len(arrays.inv_mass)
+    near = (np.ones(len(arrays.springs), bool) if spring_kind is None
+            else np.isin(spring_kind, (SpringKind.STRUCTURAL, SpringKind.SHEAR)))
     soft = arrays.attachment_stiffness > 0.0
     slots = np.full((len(soft), 4, 4), -1, np.int64)
     if soft.any():
@@ -94,4 +102,5 @@ def build_solve_layout(arrays) -> SolveLayout:
     return SolveLayout(diagonal=diagonal, runs=arrays.spring_runs.astype(np.int64),
                        run_entries=len(arrays.run_rest_length),
                        loose_pairs=arrays.springs[arrays.loose_springs].astype(np.int64)
-                       .reshape(-1, 2), attachment_slots=slots)
+                       .reshape(-1, 2), attachment_slots=slots,
+                       coarse=build_coarse_space(count, arrays.springs, near))

@@ -46,6 +46,7 @@ from ..collision.response.penalty import (linearize_contacts, newton_iterations_
 from ..collision.response.solve_friction import apply_contact_friction
 from ..errors import SceneError, require
 from ..forces import force_columns, spring_forces
+from ..implicit.coarse import no_coarse_space
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
 from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
@@ -245,12 +246,13 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
                                            work.rhs, work.dv, work.ddv)
     kind, normal, normal_floor = memory.kind, work.normal, memory.normal_floor
     r, s, c, q = work.r, work.s, work.c, work.q
+    coarse = scratch.layout.coarse
     guess = memory.velocity_change if first else np.zeros((0, 3))
     mass_start(pattern, blocks, terms, contacts, rhs, kind, normal, model.inv_mass, guess, ddv, r,
                s, q)
-    iterations, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
-                                       settings.tolerance, settings.max_iterations, 0.0, r, s, c,
-                                       q)
+    iterations, reference = contact_cg(pattern, blocks, terms, contacts, coarse, rhs, kind,
+                                       normal, ddv, settings.tolerance, settings.max_iterations,
+                                       0.0, r, s, c, q)
     conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
@@ -263,9 +265,9 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
             break
-        more, reference = contact_cg(pattern, blocks, terms, contacts, rhs, kind, normal, ddv,
-                                     settings.tolerance, settings.max_iterations, reference, r,
-                                     s, c, q)
+        more, reference = contact_cg(pattern, blocks, terms, contacts, coarse, rhs, kind,
+                                     normal, ddv, settings.tolerance, settings.max_iterations,
+                                     reference, r, s, c, q)
         conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
@@ -394,14 +396,18 @@ def advance(model, layout, settings, state, solve_pairs, statistics, h, steps, p
 class ImplicitEuler(Integrator):
     """Options: ``newton_iterations`` (default 1: the Baraff-Witkin step), ``cg_tolerance``
     (relative residual of each linear solve, against the larger of its starting residual and
-    its right-hand side, default 1e-5) and ``cg_max_iterations``."""
+    its right-hand side, default 1e-5), ``cg_max_iterations`` and ``preconditioner``
+    (``"two_level"``, the default: block Jacobi with a coarse space of aggregates,
+    implicit/coarse.py; or ``"block_jacobi"`` alone)."""
 
     name = "implicit_euler"
     order = 1
     summary = "backward Euler, one linearized solve per step (Baraff-Witkin): large stable steps"
-    OPTIONS = ("newton_iterations", "cg_tolerance", "cg_max_iterations")
+    OPTIONS = ("newton_iterations", "cg_tolerance", "cg_max_iterations", "preconditioner")
+    PRECONDITIONERS = ("two_level", "block_jacobi")
 
-    def __init__(self, newton_iterations=1, cg_tolerance=1e-5, cg_max_iterations=500, **others):
+    def __init__(self, newton_iterations=1, cg_tolerance=1e-5, cg_max_iterations=500,
+                 preconditioner="two_level", **others):
         for key, value in others.items():
             raise SceneError(f"integrator option {key}", value,
                              f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
@@ -411,7 +417,10 @@ class ImplicitEuler(Integrator):
                 cg_tolerance, "must be a relative residual in (0, 1)")
         require(_is_whole(cg_max_iterations) and cg_max_iterations >= 1,
                 "implicit.cg_max_iterations", cg_max_iterations, "must be a whole number >= 1")
+        require(preconditioner in self.PRECONDITIONERS, "implicit.preconditioner",
+                preconditioner, "must be " + " or ".join(f'"{p}"' for p in self.PRECONDITIONERS))
         self.newton_iterations = int(newton_iterations)
+        self.preconditioner = preconditioner
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
         self.statistics = Statistics.zeros()   # running totals, for diagnostics
@@ -421,8 +430,15 @@ class ImplicitEuler(Integrator):
         for as long as the model (a Simulation keeps one model)."""
         kept = self.model_cache(model)
         if "layout" not in kept:
-            kept["layout"] = build_solve_layout(model.arrays)
+            kept["layout"] = build_solve_layout(model.arrays, model.spring_kind)
         return kept["layout"]
+
+    def solve_layout(self, model):
+        """``pattern`` with the coarse space that the ``preconditioner`` option asks for."""
+        layout = self.pattern(model)
+        if self.preconditioner == "two_level":
+            return layout
+        return layout._replace(coarse=no_coarse_space(model.particle_count))
 
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
@@ -431,7 +447,7 @@ class ImplicitEuler(Integrator):
         settings = Settings(self.newton_iterations, self.cg_tolerance, self.cg_max_iterations)
         model.arrays.clock[0] = state.time   # the steps take their times from it (world.py)
         done, particle, state.pairs = advance(
-            model.arrays, self.pattern(model), settings,
+            model.arrays, self.solve_layout(model), settings,
             ImplicitState(state.positions, state.velocities, state.contacts), state.solve_pairs,
             self.statistics, float(dt), int(steps), state.pairs)
         return int(done), int(particle)
