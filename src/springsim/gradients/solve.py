@@ -67,8 +67,9 @@ class ForwardSolver:
         u = np.zeros_like(rhs)
         r, s, c, q = self.work
         done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, self.contacts,
-                             self.layout.coarse, np.ascontiguousarray(rhs), self.kind, self.normal, u, self.tolerance,
-                             self.max_iterations, 0.0, r, s, c, q)
+                             self.layout.coarse, np.ascontiguousarray(rhs), self.kind,
+                             self.normal, u, self.tolerance, self.max_iterations, 0.0, r, s, c,
+                             q)
         self.iterations += done
         return u
 

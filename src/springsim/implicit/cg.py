@@ -41,7 +41,7 @@ import numpy as np
 from .._jit import kernel
 from ..collision.response.penalty import add_contact_blocks, add_contact_product
 from ..collision.contact_sets.solve import no_contacts
-from .coarse import CoarseSpace, add_coarse_correction, coarse_factor
+from .coarse import add_coarse_correction, coarse_factor, no_coarse_space
 from .constraints import FREE, filter_constrained, filtered
 from .jacobian import block_multiply
 from .spring_terms import (add_loose_products, add_run_products, add_spring_products,
@@ -107,8 +107,8 @@ def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, 
     """``contact_cg`` for the assembled matrix alone (no ball-particle contacts, no coarse
     space)."""
     return contact_cg(pattern, blocks, no_spring_terms(), no_contacts(),
-                      CoarseSpace(np.full(u.shape[0], -1, np.int64), 0, 0), b, kind, normal, u,
-                      tolerance, max_iterations, reference_norm, r, s, c, q)
+                      no_coarse_space(u.shape[0]), b, kind, normal, u, tolerance,
+                      max_iterations, reference_norm, r, s, c, q)
 
 
 @kernel

@@ -30,7 +30,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .._jit import inline_kernel, kernel
-from .constraints import CONTACT, FREE, PINNED, filtered
+from .constraints import FREE, filtered
 
 MAX_FACTOR_FLOPS = 2e7   # a coarse matrix dearer to factor than this is aggregated again
 MIN_PARTICLES = 1000     # a smaller model solves as fast without (benchmarks/preconditioner.py)
@@ -44,7 +44,9 @@ class CoarseSpace(NamedTuple):
     bandwidth: int          # the largest |I - J| of two coupled aggregates
 
 
-def no_coarse_space(particles: int) -> CoarseSpace:
+@kernel
+def no_coarse_space(particles):
+    """The space of a solve that stays block Jacobi (no aggregates)."""
     return CoarseSpace(np.full(particles, -1, np.int64), 0, 0)
 
 
@@ -135,16 +137,14 @@ def band_width(coarse):
 
 @kernel
 def projectors(kind, normal):
-    """S_i of every particle as a 3 x 3 matrix (constraints.filtered)."""
+    """S_i of every particle as a 3 x 3 matrix: constraints.filtered applied to the unit
+    vectors, column by column."""
     out = np.zeros((kind.shape[0], 3, 3))
     for i in range(kind.shape[0]):
-        if kind[i] == PINNED:
-            continue
-        for a in range(3):
-            out[i, a, a] = 1.0
-            if kind[i] == CONTACT:
-                for b in range(3):
-                    out[i, a, b] -= normal[i, a] * normal[i, b]
+        n0, n1, n2 = normal[i, 0], normal[i, 1], normal[i, 2]
+        out[i, 0, 0], out[i, 1, 0], out[i, 2, 0] = filtered(kind[i], n0, n1, n2, 1.0, 0.0, 0.0)
+        out[i, 0, 1], out[i, 1, 1], out[i, 2, 1] = filtered(kind[i], n0, n1, n2, 0.0, 1.0, 0.0)
+        out[i, 0, 2], out[i, 1, 2], out[i, 2, 2] = filtered(kind[i], n0, n1, n2, 0.0, 0.0, 1.0)
     return out
 
 
