@@ -121,3 +121,55 @@ def test_the_wind_kernel_is_its_formula(gusts):
     add_wind_forces(arrays, x, v, np.ones(1), out)
     np.testing.assert_allclose(out, reference_wind_forces(arrays, x, v, 0.37), rtol=1e-11,
                                atol=1e-13)
+
+
+def test_the_gusts_sine_is_the_c_library_sine():
+    """wind.sine, the SIMD-friendly sine of the gusts, against NumPy's within an ulp or two,
+    over a wave's first turns and over the range where its reduction is exact."""
+    from numba import njit
+
+    from springsim.wind import sine
+
+    @njit
+    def sines(angles):
+        return np.array([sine(angle) for angle in angles])
+
+    rng = np.random.default_rng(5)
+    for angles in (np.linspace(-10.0, 10.0, 20001), rng.uniform(-1.6e6, 1.6e6, 20000)):
+        np.testing.assert_allclose(sines(angles), np.sin(angles), rtol=0, atol=4e-16)
+
+
+def test_the_wind_derivative_is_its_formula():
+    """Backward Euler's wind pass: the same impulse h F as add_wind_forces, and each particle's
+    diagonal block -h dF_i/dv_i equal to central differences of its force in its own velocity
+    (exact here: with no friction along the surface, the force is quadratic in the velocity
+    between sign changes), gusts and a ball included."""
+    from springsim.wind import add_wind_forces, add_wind_with_jacobian
+
+    wind = Wind(velocity=(5.0, 0.0, 1.0), friction=0.0, gusts=Gusts(0.3, 1.0, 4))
+    balls = Balls(balls=[Ball(position=(0.0, 1.0, 0.0), radius=0.1, mass=0.05)])
+    scene = Scene(bodies=[Cloth(particles_per_edge=5, width=1.0, height=1.0), balls], wind=wind,
+                  integrator="implicit_euler", dt=1 / 60)
+    sim = springsim.Simulation(scene)
+    rng = np.random.default_rng(7)
+    x = sim.positions + 0.05 * rng.standard_normal(sim.positions.shape)
+    v = rng.standard_normal(x.shape)
+    arrays = sim.model.arrays
+    arrays.clock[2] = 0.37
+    h, count = 1 / 60, len(x)
+    impulse, blocks = np.zeros_like(x), np.zeros((count, 3, 3))
+    add_wind_with_jacobian(arrays, np.arange(count), x, v, h, impulse, blocks)
+    force = np.zeros_like(x)
+    add_wind_forces(arrays, x, v, np.full(1, h), force)
+    assert np.array_equal(impulse, force)
+    eps = 1e-6
+    for i in range(count):
+        for c in range(3):
+            plus, minus = v.copy(), v.copy()
+            plus[i, c] += eps
+            minus[i, c] -= eps
+            f_plus, f_minus = np.zeros_like(x), np.zeros_like(x)
+            add_wind_forces(arrays, x, plus, np.ones(1), f_plus)
+            add_wind_forces(arrays, x, minus, np.ones(1), f_minus)
+            derivative = (f_plus[i] - f_minus[i]) / (2 * eps)
+            np.testing.assert_allclose(blocks[i, :, c], -h * derivative, rtol=1e-6, atol=1e-9)

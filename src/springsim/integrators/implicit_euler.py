@@ -55,7 +55,7 @@ from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_ter
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..state import ContactMemory
-from ..wind import add_wind_forces, add_wind_jacobian
+from ..wind import add_wind_with_jacobian
 from ..world import add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_time
 from .base import Integrator, register
 from ._steps import add_scaled, copy_positions, drive
@@ -201,7 +201,9 @@ def assemble_system(model, layout, state, work, contacts, h, first):
                work.rhs)
     add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)
     add_attachment_jacobian(model, layout.attachment_slots, h, first, v, work.blocks, work.rhs)
-    add_wind_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.blocks)
+    # the air at the step's end, its force and derivative in one pass (wind.wind_pass)
+    add_wind_with_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.rhs,
+                           work.blocks)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
     work.ddv[:] = 0.0
     for i in range(x.shape[0]):
@@ -218,7 +220,8 @@ def assemble_system(model, layout, state, work, contacts, h, first):
 
 @kernel
 def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
-    """rhs = h F(x_k, v_k) - M dv_k, plus h^2 dF/dx v in the first iteration (dv_k = 0, x_k = x)."""
+    """rhs = h F(x_k, v_k) - M dv_k, plus h^2 dF/dx v in the first iteration (dv_k = 0, x_k = x);
+    the wind's part of F is added with its derivative (assemble_system)."""
     spring_forces(model, x_k, v_k, columns, force)
     for i in range(x.shape[0]):
         w = model.inv_mass[i]
@@ -228,7 +231,6 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
             rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
     add_pin_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft pins, at the step's end
     add_attachment_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft attachments, too
-    add_wind_forces(model, x_k, v_k, np.full(1, h), rhs)  # the air, at the step's end
     if first:
         add_stiffness_product(model, x, v, h * h, rhs)
 
