@@ -215,3 +215,24 @@ def test_attachments_that_cannot_bind_are_refused_before_a_step(attachment, key,
         springsim.Simulation(scene, dt=1e-4)
     assert raised.value.key == key and words in str(raised.value)
     assert "\n" not in str(raised.value)
+
+
+def test_nearest_triangles_agree_with_a_search_of_every_pair():
+    """attachments.nearest_triangles (libigl's tree) against every point-triangle pair: the
+    same distances, and weights that give a point of the chosen triangle at that distance."""
+    import trimesh
+
+    from springsim.attachments import nearest_triangles
+    from springsim.collision.distance.closest_points import closest_on_triangle
+
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    corners = np.ascontiguousarray(sphere.vertices[sphere.faces], float)
+    points = np.random.default_rng(4).uniform(-1.5, 1.5, (60, 3))
+    row, weights, gap = nearest_triangles(points, corners)
+    for i, p in enumerate(points):
+        nearest = min(np.linalg.norm(p - np.dot(closest_on_triangle(p, triangle), triangle))
+                      for triangle in corners)
+        assert gap[i] == pytest.approx(nearest, rel=1e-12, abs=1e-14)
+        on_triangle = weights[i] @ corners[row[i]]
+        assert np.linalg.norm(p - on_triangle) == pytest.approx(gap[i], rel=1e-12, abs=1e-14)
+        assert weights[i].min() >= 0.0 and weights[i].sum() == pytest.approx(1.0)

@@ -9,8 +9,9 @@ where a BVH walks a tree per particle (benchmarks/mesh_terrain.py compares the c
 with the plane's, the lookups being done a block of particles ahead, ``look_ahead``). A grid is
 exact where the distance is linear across a cell: on the flat parts of a mesh (ramps, floors,
 stairs' treads) trilinear interpolation reproduces the exact distance and normal to round-off, so
-a ramp gives the analytic tilted plane's outcome. Curved parts are smoothed at the scale of a cell (``resolution`` cells along the longest
-side), and sharp edges are rounded off at that scale.
+a ramp gives the analytic tilted plane's outcome. Curved parts are smoothed at the scale of a
+cell (``resolution`` cells along the longest side), and sharp edges are rounded off at that
+scale.
 
 The grid's values are the exact signed distances of its nodes (libigl, sign from the
 angle-weighted pseudonormals of the closest feature, which is what gives an open mesh a front
