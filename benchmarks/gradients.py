@@ -13,8 +13,8 @@ ratio per repeat, and the range of the ratios. Both are warmed (compiled or load
 cache) by a short run first.
 
 ``kernels``: the cube's parts, each timed over 200 calls, 3 times: the forward rk4 step, the
-adjoint's spring force loop and its VJP (gradients/kernels.py), and one step's adjoint
-(kernels.rk4_step_vjp: four force loops and four VJPs).
+adjoint's spring force loop and its VJP one spring at a time (gradients/kernels.py), and one
+step's adjoint (run_kernels.rk4_step_vjp: four force loops and four VJPs on springs in runs).
 
 ``memory``: the cloth's gradient over ``--duration`` s in a child process; prints the child's
 peak resident memory (ru_maxrss) and the bytes of states the tape held.
@@ -93,7 +93,7 @@ def child(duration: float) -> None:
 
 def parts() -> None:
     import springsim
-    from springsim.gradients import kernels
+    from springsim.gradients import kernels, run_kernels
     from springsim.gradients.physics import Cotangents, Physical
 
     scene, options = setup("cube")
@@ -106,6 +106,10 @@ def parts() -> None:
     bar = Cotangents.zeros(p)
     x_bar, v_bar, force = np.zeros_like(x), np.zeros_like(x), np.zeros_like(x)
     work = np.empty((17, len(x), 3))
+    layout = run_kernels.run_layout(p.a, p.b)
+    table = run_kernels.entry_table(layout, p.ks, p.kd, p.rest)
+    loose = tuple(values[layout.loose] for values in (p.a, p.b, p.ks, p.kd, p.rest))
+    columns = np.empty((run_kernels.ROWS, len(x)))
     calls = {
         "forward rk4 step": lambda: simulation.step(1),
         "force loop": lambda: kernels.add_spring_forces(p.a, p.b, p.ks, p.kd, p.rest, x, v,
@@ -113,9 +117,9 @@ def parts() -> None:
         "force VJP": lambda: kernels.add_spring_forces_vjp(p.a, p.b, p.ks, p.kd, p.rest, x, v, g,
                                                            x_bar, v_bar, bar.ks, bar.kd,
                                                            bar.rest),
-        "rk4 step adjoint": lambda: kernels.rk4_step_vjp(
-            (p.a, p.b, p.ks, p.kd, p.rest), (p.inv_mass, p.drag, p.gravity), options["dt"], x,
-            v, x_bar, v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work),
+        "rk4 step adjoint": lambda: run_kernels.rk4_step_vjp(
+            layout, table, loose, (p.inv_mass, p.drag, p.gravity), options["dt"], x, v, x_bar,
+            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns),
     }
     print(f"cube: {len(x)} particles, {len(p.a)} springs")
     for _ in range(3):

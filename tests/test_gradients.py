@@ -350,3 +350,37 @@ def test_stiffness_scales_away_from_one(name, value):
         step = 1e-6
         expected = central_difference(scene, "rk4", name, value, j, step)
         assert grad[j] == pytest.approx(expected, rel=1e-5, abs=1e-7), j
+
+
+def test_the_rk4_step_adjoint_in_runs_matches_numpy(monkeypatch):
+    """run_kernels.rk4_step_vjp (springs in runs, SIMD loops) against the same step's adjoint in
+    NumPy (RK4Adjoint.update_vjp through physics.py), on two cubes whose springs fill runs with
+    holes and (with runs of fewer than 100 springs refused) leave some loose, each spring with
+    its own stiffness (a field)."""
+    import springsim
+    from springsim.gradients.adjoints import ExplicitAdjoint, RK4Adjoint
+    from springsim.gradients.physics import Cotangents, Physical
+    from springsim.gradients.run_kernels import run_layout
+
+    monkeypatch.setattr("springsim.spring_runs.MIN_RUN", 100)
+    scene = Scene(bodies=[Cube(particles_per_edge=6, edge_length=1.0, position=(0.0, 2.0, 0.0)),
+                          Cube(particles_per_edge=3, edge_length=0.5, position=(2.0, 2.0, 0.0))],
+                  terrains=[], integrator="rk4", dt=1e-3)
+    sim = springsim.Simulation(scene)
+    rng = np.random.default_rng(11)
+    physical = Physical.of(sim.model)
+    physical = physical._replace(ks=physical.ks * rng.uniform(0.5, 2.0, len(physical.ks)))
+    layout = run_layout(physical.a, physical.b)
+    assert len(layout.loose) > 0 and (layout.entry_spring < 0).any()
+    x = sim.positions + 0.02 * rng.standard_normal(sim.positions.shape)
+    v = rng.standard_normal(x.shape)
+    x_bar, v_bar = rng.standard_normal(x.shape), rng.standard_normal(x.shape)
+    adjoint = RK4Adjoint(sim.integrator, sim.model)
+    results = []
+    for step_vjp in (RK4Adjoint.step_vjp, ExplicitAdjoint.step_vjp):
+        bar = Cotangents.zeros(physical)
+        got = step_vjp(adjoint, physical, 1e-3, (x, v), (x, v), x_bar, v_bar, bar)
+        results.append((*got, bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity))
+    for fast, numpy_reference in zip(*results):
+        scale = np.max(np.abs(numpy_reference))
+        np.testing.assert_allclose(fast, numpy_reference, rtol=0, atol=1e-12 * scale)

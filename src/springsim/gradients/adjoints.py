@@ -13,7 +13,7 @@ in NumPy from the step's start to know what it did.
 import numpy as np
 
 from .contact import far_from_planes, impacts, impacts_vjp
-from .kernels import rk4_step_vjp
+from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
@@ -95,6 +95,7 @@ class RK4Adjoint(ExplicitAdjoint):
 
     name = "rk4"
     work = None
+    runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         if not far_from_planes(physical, h, start, end):
@@ -102,11 +103,20 @@ class RK4Adjoint(ExplicitAdjoint):
         x, v = start[0], start[1]
         if self.work is None or self.work.shape[1] != len(x):
             self.work = np.empty((17, len(x), 3))
+            self.columns = np.empty((ROWS, len(x)))
+        if self.runs is None or self.runs[0] is not physical:
+            layout = run_layout(physical.a, physical.b)
+            loose = layout.loose
+            self.runs = (physical, layout, entry_table(layout, physical.ks, physical.kd,
+                                                       physical.rest),
+                         (physical.a[loose], physical.b[loose], physical.ks[loose],
+                          physical.kd[loose], physical.rest[loose]))
+        _, layout, table, loose = self.runs
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
-        rk4_step_vjp((physical.a, physical.b, physical.ks, physical.kd, physical.rest),
-                     (physical.inv_mass, physical.drag, physical.gravity), h, x, v, x_bar,
-                     v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity),
-                     self.work)
+        rk4_step_vjp(layout, table, loose, (physical.inv_mass, physical.drag, physical.gravity),
+                     h, x, v, x_bar, v_bar,
+                     (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), self.work,
+                     self.columns)
         return x_bar, v_bar
 
     def update(self, physical, h, x, v):

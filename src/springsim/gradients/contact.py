@@ -72,7 +72,7 @@ def far_from_planes(physical, h, start, end) -> bool:
     """Whether no stage of a step can have touched a plane: every free particle starts and ends
     it farther from each plane than the band and twice the distance its fastest particle
     covers in a step (an explicit step's stages stay within h |v| of its start, near enough).
-    The adjoint then skips contact (kernels.rk4_step_vjp)."""
+    The adjoint then skips contact (run_kernels.rk4_step_vjp)."""
     planes = physical.planes
     if not planes.is_plane.any():
         return True

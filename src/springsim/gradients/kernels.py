@@ -1,6 +1,6 @@
 """The adjoint's hot loops as Numba kernels: the springs' forces and the vector-Jacobian products
 (VJPs) of physics.py, whose NumPy functions are their references (tests/test_gradients.py
-compares them), and the explicit methods' whole step adjoints without contact.
+compares them); the springs in no run of the RK4 step adjoint (run_kernels.py) take these loops.
 
 Per spring (a, b): d = x_a - x_b, L = |d|, l = d / L, w = v_a - v_b, and for a cotangent g on the
 particles g_s = g_a - g_b (physics.py's module doc has the formulas). Springs are visited in
@@ -8,8 +8,6 @@ order, one thread: the sums are the same bits whatever the thread count (issue 3
 determinism). A spring of zero length has no force and passes no gradient, as in the forward.
 """
 import math
-
-import numpy as np
 
 from .._jit import kernel
 
@@ -74,90 +72,6 @@ def add_spring_forces_vjp(a, b, ks, kd, rest, x, v, g, x_bar, v_bar, ks_bar, kd_
         ks_bar[s] -= stretch * gl
         kd_bar[s] -= wl * gl
         rest_bar[s] += k * gl
-
-
-@kernel
-def accelerations(a, b, ks, kd, rest, inv_mass, drag, gravity, x, v, force, out):
-    """out = dv/dt before contact (physics.accelerations); ``force`` gets the springs'."""
-    force[:] = 0.0
-    add_spring_forces(a, b, ks, kd, rest, x, v, force)
-    for i in range(x.shape[0]):
-        w = inv_mass[i]
-        for c in range(3):
-            out[i, c] = w * (force[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
-
-
-@kernel
-def accelerations_vjp(a, b, ks, kd, rest, inv_mass, drag, x, v, force, g, x_bar, v_bar, bars,
-                      scratch):
-    """Add g . d(accelerations)/d(everything) (physics.accelerations_vjp); ``force`` is the
-    springs' force at (x, v) (from ``accelerations``), ``bars`` (ks, kd, rest, mass, drag,
-    gravity) the parameters' cotangents, ``scratch`` a (P, 3) work array."""
-    ks_bar, kd_bar, rest_bar, mass_bar, drag_bar, gravity_bar = bars
-    for i in range(x.shape[0]):
-        w = inv_mass[i]
-        if w > 0.0:
-            net = 0.0
-            for c in range(3):
-                net += g[i, c] * (force[i, c] - drag[i] * v[i, c])
-                gravity_bar[c] += g[i, c]
-            mass_bar[i] -= w * w * net
-        gv = 0.0
-        for c in range(3):
-            gv += g[i, c] * v[i, c]
-            v_bar[i, c] -= w * drag[i] * g[i, c]
-            scratch[i, c] = w * g[i, c]
-        drag_bar[i] -= w * gv
-    add_spring_forces_vjp(a, b, ks, kd, rest, x, v, scratch, x_bar, v_bar, ks_bar, kd_bar,
-                          rest_bar)
-
-
-@kernel
-def rk4_step_vjp(springs, particles, h, x, v, x_bar, v_bar, bars, work):
-    """The adjoint of one RK4 step without contact (adjoints.RK4Adjoint): (x_bar, v_bar) at
-    the step's start, in place of those at its end. ``springs`` (a, b, ks, kd, rest),
-    ``particles`` (inv_mass, drag, gravity); ``work`` 17 (P, 3) arrays."""
-    a, b, ks, kd, rest = springs
-    inv_mass, drag, gravity = particles
-    count = x.shape[0]
-    xs, vs, fs, acc = work[0:4], work[4:8], work[8:12], work[12:16]
-    scratch = work[16]
-    # the stages, as rk4.py takes them
-    xs[0][:] = x
-    vs[0][:] = v
-    for k in range(4):
-        if k > 0:
-            step = h if k == 3 else h / 2
-            for i in range(count):
-                for c in range(3):
-                    xs[k][i, c] = x[i, c] + step * vs[k - 1][i, c]
-                    vs[k][i, c] = v[i, c] + step * acc[k - 1][i, c]
-        accelerations(a, b, ks, kd, rest, inv_mass, drag, gravity, xs[k], vs[k], fs[k], acc[k])
-    # backwards: stage k's slope (v_k, a_k) enters y' with weight; its state is
-    # y + step (v_{k-1}, a_{k-1}), so what reaches (x_k, v_k) is carried to stage k-1
-    out_x, out_v = x_bar.copy(), v_bar.copy()
-    xk_bar, vk_bar = np.zeros((count, 3)), np.zeros((count, 3))
-    g = np.empty((count, 3))
-    v_carry, a_carry = np.zeros((count, 3)), np.zeros((count, 3))
-    for k in range(3, -1, -1):
-        weight = h / 6 if k == 0 or k == 3 else h / 3
-        for i in range(count):
-            for c in range(3):
-                xk_bar[i, c] = 0.0
-                vk_bar[i, c] = weight * x_bar[i, c] + v_carry[i, c]
-                g[i, c] = weight * v_bar[i, c] + a_carry[i, c]
-        accelerations_vjp(a, b, ks, kd, rest, inv_mass, drag, xs[k], vs[k], fs[k], g, xk_bar,
-                          vk_bar, bars, scratch)
-        step = h if k == 3 else h / 2
-        for i in range(count):
-            for c in range(3):
-                out_x[i, c] += xk_bar[i, c]
-                out_v[i, c] += vk_bar[i, c]
-                v_carry[i, c] = step * xk_bar[i, c]
-                a_carry[i, c] = step * vk_bar[i, c]
-    # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
-    x_bar[:] = out_x
-    v_bar[:] = out_v
 
 
 # --- the implicit system (physics.stiffness_product_vjp, system_product_vjp) --------------------

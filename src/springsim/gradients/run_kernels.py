@@ -1,0 +1,323 @@
+"""The RK4 step adjoint on springs in runs (spring_runs.py), the layout in which the forward's
+force loop compiles to SIMD code: here the adjoint's own force evaluations and its
+vector-Jacobian products (VJPs) use it too, with parameters per spring (a stiffness field gives
+the springs of one run different constants) kept per entry of the runs.
+
+Entry e of a run holds spring ``entry_spring[e]``, or -1 at a hole, whose stiffness and damping
+are zero so that it adds nothing. The VJP of a run is three loops, each computing again from the
+positions what it needs: a single loop writing all nine results compiles to scalar code (the
+compiler cannot prove so many written arrays apart from the read ones), three loops of three
+results each to SIMD code, about twice as fast in all (benchmarks/gradients.py kernels). Springs
+in no run take kernels.py's loops. One thread, a fixed order: the same bits for any thread count.
+
+The columns (``cols``, ROWS x P) hold, by rows: positions, velocities, the cotangent g on the
+forces, the springs' force, three blocks of scratch and the cotangents of x and v.
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .._jit import inline_kernel, kernel
+from ..spring_runs import build_spring_runs
+from .kernels import add_spring_forces, add_spring_forces_vjp
+
+X, V, G, FORCE, PUSH, DAMP, SHARE, X_BAR, V_BAR = range(0, 27, 3)   # first rows of each block
+ROWS = 27
+KS, KD, REST, KS_BAR, KD_BAR, REST_BAR = range(6)                    # rows of the entry table
+
+
+class RunLayout(NamedTuple):
+    """Springs (a, b) in runs of one offset: ``runs`` (R, 5) as spring_runs.build_spring_runs
+    gives them (first, offset, count, start, group), the spring at each entry (-1: a hole) and
+    the springs in no run."""
+
+    runs: np.ndarray
+    entry_spring: np.ndarray
+    loose: np.ndarray
+
+
+def run_layout(a: np.ndarray, b: np.ndarray) -> RunLayout:
+    """The runs of springs (a, b), whatever their parameters (one group)."""
+    numbers = np.arange(len(a), dtype=float)   # carried through the runs as their "rest length"
+    runs = build_spring_runs(np.stack([a, b], axis=1), np.zeros(len(a), np.int64), numbers)
+    return RunLayout(runs["spring_runs"], runs["run_rest_length"].astype(np.int64),
+                     runs["loose_springs"].astype(np.int64))
+
+
+def entry_table(layout: RunLayout, ks, kd, rest) -> np.ndarray:
+    """(6, E): each entry's ks, kd and rest length (a hole's 0, 0, -1) and three rows for their
+    cotangents."""
+    spring, hole = layout.entry_spring, layout.entry_spring < 0
+    table = np.zeros((6, len(spring)))
+    table[KS] = np.where(hole, 0.0, ks[spring])
+    table[KD] = np.where(hole, 0.0, kd[spring])
+    table[REST] = np.where(hole, -1.0, rest[spring])
+    return table
+
+
+@inline_kernel
+def rows(cols, first, a, count):
+    """Rows first, first + 1, first + 2 of the columns from a, count long."""
+    return (cols[first, a:a + count], cols[first + 1, a:a + count],
+            cols[first + 2, a:a + count])
+
+
+@inline_kernel
+def add_run_forces(cols, a, b, count, ks, kd, rest):
+    """The force rows += the force of springs (a + i, b + i), i < count."""
+    x_a, y_a, z_a = rows(cols, X, a, count)
+    x_b, y_b, z_b = rows(cols, X, b, count)
+    u_a, v_a, w_a = rows(cols, V, a, count)
+    u_b, v_b, w_b = rows(cols, V, b, count)
+    fx, fy, fz = rows(cols, PUSH, a, count)
+    for i in range(count):
+        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inverse = 1.0 / length if length > 0.0 else 0.0
+        closing = ((u_a[i] - u_b[i]) * dx + (v_a[i] - v_b[i]) * dy
+                   + (w_a[i] - w_b[i]) * dz) * inverse
+        factor = (-ks[i] * (length - rest[i]) - kd[i] * closing) * inverse
+        fx[i], fy[i], fz[i] = factor * dx, factor * dy, factor * dz
+    add_to_ends(cols, FORCE, PUSH, a, b, count, 1.0)
+
+
+@inline_kernel
+def add_to_ends(cols, target, source, a, b, count, sign):
+    """Rows target.. at a + i += sign source[i], and at b + i -= it (their own loops: b + i may be
+    a + j of another i)."""
+    for c in range(3):
+        from_a, to_a, to_b = (cols[source + c, a:a + count], cols[target + c, a:a + count],
+                              cols[target + c, b:b + count])
+        for i in range(count):
+            to_a[i] += sign * from_a[i]
+        for i in range(count):
+            to_b[i] -= sign * from_a[i]
+
+
+@inline_kernel
+def push_vjp(cols, a, b, count, ks, kd, rest):
+    """PUSH rows: g . d(force on a)/d x_a for springs (a + i, b + i) (kernels.add_spring_forces_vjp
+    has the formula)."""
+    x_a, y_a, z_a = rows(cols, X, a, count)
+    x_b, y_b, z_b = rows(cols, X, b, count)
+    u_a, v_a, w_a = rows(cols, V, a, count)
+    u_b, v_b, w_b = rows(cols, V, b, count)
+    g_a, h_a, k_a = rows(cols, G, a, count)
+    g_b, h_b, k_b = rows(cols, G, b, count)
+    ex, ey, ez = rows(cols, PUSH, a, count)
+    for i in range(count):
+        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inverse = 1.0 / length if length > 0.0 else 0.0
+        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
+        wx, wy, wz = u_a[i] - u_b[i], v_a[i] - v_b[i], w_a[i] - w_b[i]
+        gx, gy, gz = g_a[i] - g_b[i], h_a[i] - h_b[i], k_a[i] - k_b[i]
+        gl = gx * lx + gy * ly + gz * lz
+        wl = wx * lx + wy * ly + wz * lz
+        ratio = (length - rest[i]) * inverse
+        px, py, pz = gl * wx + wl * gx, gl * wy + wl * gy, gl * wz + wl * gz
+        pl = px * lx + py * ly + pz * lz
+        k, c = ks[i], kd[i]
+        ex[i] = -k * (gl * lx + (gx - gl * lx) * ratio) - c * (px - pl * lx) * inverse
+        ey[i] = -k * (gl * ly + (gy - gl * ly) * ratio) - c * (py - pl * ly) * inverse
+        ez[i] = -k * (gl * lz + (gz - gl * lz) * ratio) - c * (pz - pl * lz) * inverse
+
+
+@inline_kernel
+def damp_vjp(cols, a, b, count, kd):
+    """DAMP rows: minus g . d(force on a)/d v_a, kd (g_s . l) l."""
+    x_a, y_a, z_a = rows(cols, X, a, count)
+    x_b, y_b, z_b = rows(cols, X, b, count)
+    g_a, h_a, k_a = rows(cols, G, a, count)
+    g_b, h_b, k_b = rows(cols, G, b, count)
+    qx, qy, qz = rows(cols, DAMP, a, count)
+    for i in range(count):
+        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inverse = 1.0 / length if length > 0.0 else 0.0
+        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
+        damped = kd[i] * ((g_a[i] - g_b[i]) * lx + (h_a[i] - h_b[i]) * ly
+                          + (k_a[i] - k_b[i]) * lz)
+        qx[i], qy[i], qz[i] = damped * lx, damped * ly, damped * lz
+
+
+@inline_kernel
+def share_vjp(cols, a, b, count, ks, rest):
+    """SHARE rows: minus the cotangents of ks and kd, and that of the rest length."""
+    x_a, y_a, z_a = rows(cols, X, a, count)
+    x_b, y_b, z_b = rows(cols, X, b, count)
+    u_a, v_a, w_a = rows(cols, V, a, count)
+    u_b, v_b, w_b = rows(cols, V, b, count)
+    g_a, h_a, k_a = rows(cols, G, a, count)
+    g_b, h_b, k_b = rows(cols, G, b, count)
+    of_ks, of_kd, of_rest = rows(cols, SHARE, a, count)
+    for i in range(count):
+        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inverse = 1.0 / length if length > 0.0 else 0.0
+        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
+        gl = (g_a[i] - g_b[i]) * lx + (h_a[i] - h_b[i]) * ly + (k_a[i] - k_b[i]) * lz
+        of_ks[i] = (length - rest[i]) * gl
+        of_kd[i] = ((u_a[i] - u_b[i]) * lx + (v_a[i] - v_b[i]) * ly + (w_a[i] - w_b[i]) * lz) * gl
+        of_rest[i] = ks[i] * gl
+
+
+@inline_kernel
+def add_run_vjp(cols, table, a, b, count, start):
+    """Add g . d(force)/d(x, v) of springs (a + i, b + i) to the cotangent rows, and
+    g . d(force)/d(ks, kd, rest) to the table's cotangent rows at entries start + i."""
+    ks, kd, rest = table_rows(table, start, count)
+    push_vjp(cols, a, b, count, ks, kd, rest)
+    damp_vjp(cols, a, b, count, kd)
+    share_vjp(cols, a, b, count, ks, rest)
+    add_to_ends(cols, X_BAR, PUSH, a, b, count, 1.0)
+    add_to_ends(cols, V_BAR, DAMP, a, b, count, -1.0)
+    of_ks, of_kd, of_rest = rows(cols, SHARE, a, count)
+    ks_bar, kd_bar = table[KS_BAR, start:start + count], table[KD_BAR, start:start + count]
+    rest_bar = table[REST_BAR, start:start + count]
+    for i in range(count):
+        ks_bar[i] -= of_ks[i]
+        kd_bar[i] -= of_kd[i]
+        rest_bar[i] += of_rest[i]
+
+
+@inline_kernel
+def to_rows(cols, first, values):
+    """Rows first.. of the columns = values (P, 3)."""
+    for i in range(values.shape[0]):
+        for c in range(3):
+            cols[first + c, i] = values[i, c]
+
+
+@inline_kernel
+def stage_accelerations(runs, table, loose, particles, x, v, cols, force, out):
+    """out = dv/dt at (x, v) before contact (physics.accelerations), ``force`` the springs'."""
+    inv_mass, drag, gravity = particles
+    to_rows(cols, X, x)
+    to_rows(cols, V, v)
+    cols[FORCE:FORCE + 3] = 0.0
+    for r in range(runs.shape[0]):
+        first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+        ks, kd, rest = table_rows(table, start, count)
+        add_run_forces(cols, first, first + offset, count, ks, kd, rest)
+    for i in range(x.shape[0]):
+        for c in range(3):
+            force[i, c] = cols[FORCE + c, i]
+    add_spring_forces(loose[0], loose[1], loose[2], loose[3], loose[4], x, v, force)
+    for i in range(x.shape[0]):
+        w = inv_mass[i]
+        for c in range(3):
+            out[i, c] = w * (force[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
+
+
+@inline_kernel
+def table_rows(table, start, count):
+    """ks, kd and rest length of one run's entries."""
+    return (table[KS, start:start + count], table[KD, start:start + count],
+            table[REST, start:start + count])
+
+
+@inline_kernel
+def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, force, g, x_bar,
+                            v_bar, bars, cols):
+    """Add g . d(stage_accelerations)/d(everything) (physics.accelerations_vjp): to x_bar,
+    v_bar, the particles' cotangents in ``bars`` and the springs' in the table and
+    ``loose_bars``."""
+    a, b, ks, kd, rest = loose
+    inv_mass, drag, gravity = particles
+    _, _, _, mass_bar, drag_bar, gravity_bar = bars
+    to_rows(cols, X, x)
+    to_rows(cols, V, v)
+    cols[X_BAR:V_BAR + 3] = 0.0
+    for i in range(x.shape[0]):
+        w = inv_mass[i]
+        if w > 0.0:
+            net = 0.0
+            for c in range(3):
+                net += g[i, c] * (force[i, c] - drag[i] * v[i, c])
+                gravity_bar[c] += g[i, c]
+            mass_bar[i] -= w * w * net
+        gv = 0.0
+        for c in range(3):
+            gv += g[i, c] * v[i, c]
+            v_bar[i, c] -= w * drag[i] * g[i, c]
+            cols[G + c, i] = w * g[i, c]
+        drag_bar[i] -= w * gv
+    for r in range(runs.shape[0]):
+        first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+        add_run_vjp(cols, table, first, first + offset, count, start)
+    for i in range(x.shape[0]):
+        for c in range(3):
+            x_bar[i, c] += cols[X_BAR + c, i]
+            v_bar[i, c] += cols[V_BAR + c, i]
+    scaled_g = np.empty_like(g)
+    for i in range(x.shape[0]):
+        for c in range(3):
+            scaled_g[i, c] = cols[G + c, i]
+    loose_ks_bar, loose_kd_bar, loose_rest_bar = loose_bars
+    add_spring_forces_vjp(a, b, ks, kd, rest, x, v, scaled_g, x_bar, v_bar, loose_ks_bar,
+                          loose_kd_bar, loose_rest_bar)
+
+
+@kernel
+def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, work, cols):
+    """The adjoint of one RK4 step without contact (adjoints.RK4Adjoint): (x_bar, v_bar) at
+    the step's start, in place of those at its end. ``layout`` (runs, entry_spring, loose
+    spring numbers), ``table`` (entry_table), ``loose`` (a, b, ks, kd, rest) of the springs in no
+    run, ``particles`` (inv_mass, drag, gravity), ``bars`` (ks, kd, rest, mass, drag, gravity)
+    the parameters' cotangents, added to; ``work`` 17 (P, 3) arrays; ``cols`` (ROWS, P)."""
+    runs, entry_spring, loose_springs = layout
+    count = x.shape[0]
+    xs, vs, fs, acc = work[0:4], work[4:8], work[8:12], work[12:16]
+    # the stages, as rk4.py takes them
+    xs[0][:] = x
+    vs[0][:] = v
+    for k in range(4):
+        if k > 0:
+            step = h if k == 3 else h / 2
+            for i in range(count):
+                for c in range(3):
+                    xs[k][i, c] = x[i, c] + step * vs[k - 1][i, c]
+                    vs[k][i, c] = v[i, c] + step * acc[k - 1][i, c]
+        stage_accelerations(runs, table, loose, particles, xs[k], vs[k], cols, fs[k], acc[k])
+    # backwards: stage k's slope (v_k, a_k) enters y' with weight; its state is
+    # y + step (v_{k-1}, a_{k-1}), so what reaches (x_k, v_k) is carried to stage k-1
+    loose_bars = (np.zeros(loose_springs.shape[0]), np.zeros(loose_springs.shape[0]),
+                  np.zeros(loose_springs.shape[0]))
+    table[KS_BAR:REST_BAR + 1] = 0.0
+    out_x, out_v = x_bar.copy(), v_bar.copy()
+    xk_bar, vk_bar = np.zeros((count, 3)), np.zeros((count, 3))
+    g = np.empty((count, 3))
+    v_carry, a_carry = np.zeros((count, 3)), np.zeros((count, 3))
+    for k in range(3, -1, -1):
+        weight = h / 6 if k == 0 or k == 3 else h / 3
+        for i in range(count):
+            for c in range(3):
+                xk_bar[i, c] = 0.0
+                vk_bar[i, c] = weight * x_bar[i, c] + v_carry[i, c]
+                g[i, c] = weight * v_bar[i, c] + a_carry[i, c]
+        stage_accelerations_vjp(runs, table, loose, loose_bars, particles, xs[k], vs[k], fs[k],
+                                g, xk_bar, vk_bar, bars, cols)
+        step = h if k == 3 else h / 2
+        for i in range(count):
+            for c in range(3):
+                out_x[i, c] += xk_bar[i, c]
+                out_v[i, c] += vk_bar[i, c]
+                v_carry[i, c] = step * xk_bar[i, c]
+                a_carry[i, c] = step * vk_bar[i, c]
+    # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
+    x_bar[:] = out_x
+    v_bar[:] = out_v
+    ks_bar, kd_bar, rest_bar = bars[0], bars[1], bars[2]
+    for e in range(entry_spring.shape[0]):
+        s = entry_spring[e]
+        if s >= 0:
+            ks_bar[s] += table[KS_BAR, e]
+            kd_bar[s] += table[KD_BAR, e]
+            rest_bar[s] += table[REST_BAR, e]
+    for j in range(loose_springs.shape[0]):
+        s = loose_springs[j]
+        ks_bar[s] += loose_bars[0][j]
+        kd_bar[s] += loose_bars[1][j]
+        rest_bar[s] += loose_bars[2][j]
