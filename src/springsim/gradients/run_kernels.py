@@ -64,21 +64,39 @@ def rows(cols, first, a, count):
 
 
 @inline_kernel
+def ends(cols, first, a, b, count):
+    """Rows first.. of the columns at the springs' first ends and at their second ends."""
+    x_a, y_a, z_a = rows(cols, first, a, count)
+    x_b, y_b, z_b = rows(cols, first, b, count)
+    return x_a, y_a, z_a, x_b, y_b, z_b
+
+
+@inline_kernel
+def difference(values, i):
+    """Spring i's value at its first end minus that at its second (``values``: ends)."""
+    return values[0][i] - values[3][i], values[1][i] - values[4][i], values[2][i] - values[5][i]
+
+
+@inline_kernel
+def direction(positions, i):
+    """Spring i's d = x_a - x_b, 1/|d| (zero for a spring of no length: no force, no gradient)
+    and unit vector."""
+    dx, dy, dz = difference(positions, i)
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    inverse = 1.0 / length if length > 0.0 else 0.0
+    return length, inverse, dx * inverse, dy * inverse, dz * inverse
+
+
+@inline_kernel
 def add_run_forces(cols, a, b, count, ks, kd, rest):
     """The force rows += the force of springs (a + i, b + i), i < count."""
-    x_a, y_a, z_a = rows(cols, X, a, count)
-    x_b, y_b, z_b = rows(cols, X, b, count)
-    u_a, v_a, w_a = rows(cols, V, a, count)
-    u_b, v_b, w_b = rows(cols, V, b, count)
+    positions, velocities = ends(cols, X, a, b, count), ends(cols, V, a, b, count)
     fx, fy, fz = rows(cols, PUSH, a, count)
     for i in range(count):
-        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inverse = 1.0 / length if length > 0.0 else 0.0
-        closing = ((u_a[i] - u_b[i]) * dx + (v_a[i] - v_b[i]) * dy
-                   + (w_a[i] - w_b[i]) * dz) * inverse
-        factor = (-ks[i] * (length - rest[i]) - kd[i] * closing) * inverse
-        fx[i], fy[i], fz[i] = factor * dx, factor * dy, factor * dz
+        length, _, lx, ly, lz = direction(positions, i)
+        wx, wy, wz = difference(velocities, i)
+        factor = -ks[i] * (length - rest[i]) - kd[i] * (wx * lx + wy * ly + wz * lz)
+        fx[i], fy[i], fz[i] = factor * lx, factor * ly, factor * lz
     add_to_ends(cols, FORCE, PUSH, a, b, count, 1.0)
 
 
@@ -99,20 +117,13 @@ def add_to_ends(cols, target, source, a, b, count, sign):
 def push_vjp(cols, a, b, count, ks, kd, rest):
     """PUSH rows: g . d(force on a)/d x_a for springs (a + i, b + i) (kernels.add_spring_forces_vjp
     has the formula)."""
-    x_a, y_a, z_a = rows(cols, X, a, count)
-    x_b, y_b, z_b = rows(cols, X, b, count)
-    u_a, v_a, w_a = rows(cols, V, a, count)
-    u_b, v_b, w_b = rows(cols, V, b, count)
-    g_a, h_a, k_a = rows(cols, G, a, count)
-    g_b, h_b, k_b = rows(cols, G, b, count)
+    positions, velocities = ends(cols, X, a, b, count), ends(cols, V, a, b, count)
+    cotangents = ends(cols, G, a, b, count)
     ex, ey, ez = rows(cols, PUSH, a, count)
     for i in range(count):
-        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inverse = 1.0 / length if length > 0.0 else 0.0
-        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
-        wx, wy, wz = u_a[i] - u_b[i], v_a[i] - v_b[i], w_a[i] - w_b[i]
-        gx, gy, gz = g_a[i] - g_b[i], h_a[i] - h_b[i], k_a[i] - k_b[i]
+        length, inverse, lx, ly, lz = direction(positions, i)
+        wx, wy, wz = difference(velocities, i)
+        gx, gy, gz = difference(cotangents, i)
         gl = gx * lx + gy * ly + gz * lz
         wl = wx * lx + wy * ly + wz * lz
         ratio = (length - rest[i]) * inverse
@@ -127,39 +138,28 @@ def push_vjp(cols, a, b, count, ks, kd, rest):
 @inline_kernel
 def damp_vjp(cols, a, b, count, kd):
     """DAMP rows: minus g . d(force on a)/d v_a, kd (g_s . l) l."""
-    x_a, y_a, z_a = rows(cols, X, a, count)
-    x_b, y_b, z_b = rows(cols, X, b, count)
-    g_a, h_a, k_a = rows(cols, G, a, count)
-    g_b, h_b, k_b = rows(cols, G, b, count)
+    positions, cotangents = ends(cols, X, a, b, count), ends(cols, G, a, b, count)
     qx, qy, qz = rows(cols, DAMP, a, count)
     for i in range(count):
-        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inverse = 1.0 / length if length > 0.0 else 0.0
-        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
-        damped = kd[i] * ((g_a[i] - g_b[i]) * lx + (h_a[i] - h_b[i]) * ly
-                          + (k_a[i] - k_b[i]) * lz)
+        _, _, lx, ly, lz = direction(positions, i)
+        gx, gy, gz = difference(cotangents, i)
+        damped = kd[i] * (gx * lx + gy * ly + gz * lz)
         qx[i], qy[i], qz[i] = damped * lx, damped * ly, damped * lz
 
 
 @inline_kernel
 def share_vjp(cols, a, b, count, ks, rest):
     """SHARE rows: minus the cotangents of ks and kd, and that of the rest length."""
-    x_a, y_a, z_a = rows(cols, X, a, count)
-    x_b, y_b, z_b = rows(cols, X, b, count)
-    u_a, v_a, w_a = rows(cols, V, a, count)
-    u_b, v_b, w_b = rows(cols, V, b, count)
-    g_a, h_a, k_a = rows(cols, G, a, count)
-    g_b, h_b, k_b = rows(cols, G, b, count)
+    positions, velocities = ends(cols, X, a, b, count), ends(cols, V, a, b, count)
+    cotangents = ends(cols, G, a, b, count)
     of_ks, of_kd, of_rest = rows(cols, SHARE, a, count)
     for i in range(count):
-        dx, dy, dz = x_a[i] - x_b[i], y_a[i] - y_b[i], z_a[i] - z_b[i]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inverse = 1.0 / length if length > 0.0 else 0.0
-        lx, ly, lz = dx * inverse, dy * inverse, dz * inverse
-        gl = (g_a[i] - g_b[i]) * lx + (h_a[i] - h_b[i]) * ly + (k_a[i] - k_b[i]) * lz
+        length, _, lx, ly, lz = direction(positions, i)
+        wx, wy, wz = difference(velocities, i)
+        gx, gy, gz = difference(cotangents, i)
+        gl = gx * lx + gy * ly + gz * lz
         of_ks[i] = (length - rest[i]) * gl
-        of_kd[i] = ((u_a[i] - u_b[i]) * lx + (v_a[i] - v_b[i]) * ly + (w_a[i] - w_b[i]) * lz) * gl
+        of_kd[i] = (wx * lx + wy * ly + wz * lz) * gl
         of_rest[i] = ks[i] * gl
 
 
