@@ -9,7 +9,7 @@
    with implicit_euler's conjugate-gradient iterations per step.
 2. Wind on a cloth against the same cloth in still air (limit: 15% more per step): the reference
    cloth (25 x 25) hanging from its corners, rk4 at 0.1 ms (its scenes' step) and
-   implicit_euler at 1/60 s, in a 6 m/s wind with gusts.
+   implicit_euler at 1/60 s, in a 6 m/s wind with gusts; and the wind's force pass alone.
 3. The `cape` preset against real time (limit: faster than real time): a 2,500-particle cloth
    pinned to the shoulders of a walking figure, a mesh terrain of about 10,000 triangles that a
    point cache deforms, implicit_euler at 1/60 s; simulated seconds per wall-clock second over
@@ -115,6 +115,31 @@ def wind() -> None:
               f"{best['still air'] * 1e3:.3f} ms, wind {best['wind'] * 1e3:.3f} ms per step "
               f"from the same blown-out state: +{(best['wind'] / best['still air'] - 1) * 100:.1f}%"
               f" (limit 15%)")
+    print(f"the wind's force pass alone (wind.add_wind_forces) on that state: "
+          f"{wind_pass_time(sims['wind']) * 1e6:.1f} us, best of {ROUNDS} rounds of 200")
+
+
+def wind_pass_time(sim) -> float:
+    """Seconds per call of the wind's force pass at the simulation's state, best of ROUNDS."""
+    from numba import njit
+
+    from springsim.wind import add_wind_forces
+
+    @njit
+    def passes(model, x, v, scale, out, count):
+        for _ in range(count):
+            add_wind_forces(model, x, v, scale, out)
+
+    model = sim.model.arrays
+    x, v = sim.state.positions.copy(), sim.state.velocities.copy()
+    out = np.zeros_like(x)
+    passes(model, x, v, model.inv_mass, out, 1)
+    best = np.inf
+    for _ in range(ROUNDS):
+        start = time.perf_counter()
+        passes(model, x, v, model.inv_mass, out, 200)
+        best = min(best, (time.perf_counter() - start) / 200)
+    return best
 
 
 def cape() -> None:

@@ -250,18 +250,22 @@ def corner_gusts(air, modes, x, triangles, t):
                 seen[i] = True
                 corners[count] = i
                 count += 1
-    waves = np.empty(count)
+    # the corners' positions and gusts in contiguous arrays, so that each mode's loop is SIMD
+    px, py, pz = np.empty(count), np.empty(count), np.empty(count)
+    for j in range(count):
+        px[j], py[j], pz[j] = x[corners[j], 0], x[corners[j], 1], x[corners[j], 2]
+    gx, gy, gz = np.zeros(count), np.zeros(count), np.zeros(count)
     for g in range(modes.shape[0]):
-        for j in range(count):
-            i = corners[j]
-            waves[j] = wave_angle(modes, g, x[i, 0], x[i, 1], x[i, 2], t)
-        for j in range(count):
-            waves[j] = sine(waves[j])
-        for j in range(count):
-            i = corners[j]
-            gusts[i, 0] += air.gust * waves[j] * modes[g, 0]
-            gusts[i, 1] += air.gust * waves[j] * modes[g, 1]
-            gusts[i, 2] += air.gust * waves[j] * modes[g, 2]
+        k0, k1, k2, frequency, phase = (modes[g, 3], modes[g, 4], modes[g, 5], modes[g, 6],
+                                        modes[g, 7])
+        d0, d1, d2, size = modes[g, 0], modes[g, 1], modes[g, 2], air.gust
+        for j in range(count):   # wave_angle and gust_velocity's sums, written out
+            wave = sine(k0 * px[j] + k1 * py[j] + k2 * pz[j] - frequency * t + phase)
+            gx[j] += size * wave * d0
+            gy[j] += size * wave * d1
+            gz[j] += size * wave * d2
+    for j in range(count):
+        gusts[corners[j], 0], gusts[corners[j], 1], gusts[corners[j], 2] = gx[j], gy[j], gz[j]
     return gusts
 
 
