@@ -130,9 +130,9 @@ def pack_attachments(attachments, built, offsets) -> dict:
 def nearest_triangles(points, corners):
     """For each point (n, 3): the row of its nearest triangle of ``corners`` (T, 3, 3), the
     closest point's barycentric weights (n, 3) and its distance (m). libigl's AABB tree finds
-    the triangle (a search of every pair costs points times triangles: seconds for a cape bound
-    to a body of 100,000 triangles); the weights come from the contact code's closest_on_triangle, so the binding holds the point
-    that contact would find."""
+    the triangle, since a search of every pair grows as points times triangles
+    (benchmarks/attachments.py); the weights come from the contact code's closest_on_triangle,
+    so that the binding holds the point contact would find."""
     import igl
 
     vertices = corners.reshape(-1, 3)

@@ -94,7 +94,7 @@ class RK4Adjoint(ExplicitAdjoint):
     contact is at the whole step h, as the forward's."""
 
     name = "rk4"
-    work = None
+    work = columns = None   # the kernel's work arrays, sized to the model
     runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
