@@ -198,8 +198,8 @@ COSINE = (4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894
 @inline_kernel
 def sine(angle):
     """sin(angle) within an ulp or two, with no call to the C library, so that a loop of it
-    compiles to SIMD code (math.sin is a call per element, eight times slower here: the gusts'
-    sines were half the wind's cost). The reduction is exact for |angle| < 2^20 pi/2, 1.6e6 rad:
+    compiles to SIMD code (math.sin is a call per element, several times slower, and the gusts'
+    sines were much of the wind's cost). The reduction is exact for |angle| < 2^20 pi/2, 1.6e6 rad:
     a gust wave of 1 m reaches that after about two days of simulated time."""
     k = math.floor(angle * TWO_OVER_PI + 0.5)
     r = ((angle - k * PI_OVER_2[0]) - k * PI_OVER_2[1]) - k * PI_OVER_2[2]
@@ -325,7 +325,7 @@ def wind_pass(model, x, v, scale, out, jacobian, diagonal_slot, h, blocks):
     air, modes = air_at(model, t), model.wind_modes
     gusts = corner_gusts(air, modes, x, model.wind_triangles, t)
     # whether there are gusts is asked once, not at every triangle: asked there, it kept the
-    # loop from being compiled as well, and the loop ran twice as slowly
+    # loop from being compiled as well, and the loop ran much more slowly
     if gusts.shape[0] > 0:
         add_triangle_winds(model, air, gusts, True, x, v, scale, out, jacobian, diagonal_slot, h,
                            blocks)

@@ -230,6 +230,7 @@ def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, for
     to_rows(cols, X, x)
     to_rows(cols, V, v)
     cols[X_BAR:V_BAR + 3] = 0.0
+    scaled_g = np.empty_like(g)   # the cotangent on the springs' force: w g
     for i in range(x.shape[0]):
         w = inv_mass[i]
         if w > 0.0:
@@ -242,8 +243,9 @@ def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, for
         for c in range(3):
             gv += g[i, c] * v[i, c]
             v_bar[i, c] -= w * drag[i] * g[i, c]
-            cols[G + c, i] = w * g[i, c]
+            scaled_g[i, c] = w * g[i, c]
         drag_bar[i] -= w * gv
+    to_rows(cols, G, scaled_g)
     for r in range(runs.shape[0]):
         first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
         add_run_vjp(cols, table, first, first + offset, count, start)
@@ -251,10 +253,6 @@ def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, for
         for c in range(3):
             x_bar[i, c] += cols[X_BAR + c, i]
             v_bar[i, c] += cols[V_BAR + c, i]
-    scaled_g = np.empty_like(g)
-    for i in range(x.shape[0]):
-        for c in range(3):
-            scaled_g[i, c] = cols[G + c, i]
     loose_ks_bar, loose_kd_bar, loose_rest_bar = loose_bars
     add_spring_forces_vjp(a, b, ks, kd, rest, x, v, scaled_g, x_bar, v_bar, loose_ks_bar,
                           loose_kd_bar, loose_rest_bar)
