@@ -6,7 +6,9 @@ name (``@register_adjoint``). Each mirrors its method's step (integrators/) line
 reverse, so the gradient is of the arithmetic the simulation did, not of the differential
 equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)`` takes the
 recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
-start. The explicit methods' terrain contact (planes: contact.py) is in their force evaluations
+start, the step's start time in ``physical.clock`` (tape.backward sets it); each force
+evaluation sets the wind's time there first, as the forward's stages move the world. The
+explicit methods' terrain contact (planes: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
 in NumPy from the step's start to know what it did.
 """
@@ -17,6 +19,7 @@ from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
+from .wind import STEP_START, WIND_TIME, blows
 
 ADJOINTS: dict[str, type] = {}
 
@@ -24,6 +27,11 @@ ADJOINTS: dict[str, type] = {}
 def register_adjoint(cls):
     ADJOINTS[cls.name] = cls
     return cls
+
+
+def at_time(physical, offset):
+    """Set the wind's time to the step's start plus ``offset`` (s)."""
+    physical.clock[WIND_TIME] = physical.clock[STEP_START] + offset
 
 
 class Adjoint:
@@ -57,11 +65,13 @@ class SymplecticEulerAdjoint(ExplicitAdjoint):
     name = "symplectic_euler"
 
     def update(self, physical, h, x, v):
+        at_time(physical, 0.0)
         a, touches = step_accelerations(physical, x, v, h)
         v_new = v + h * a
         return x + h * v_new, v_new, touches
 
     def update_vjp(self, physical, h, x, v, touches, x_bar, v_bar, bar):
+        at_time(physical, 0.0)
         v_new_bar = v_bar + h * x_bar
         a_bar = h * v_new_bar
         x_bar, v_bar = x_bar.copy(), v_new_bar.copy()
@@ -76,10 +86,12 @@ class ExplicitEulerAdjoint(ExplicitAdjoint):
     name = "explicit_euler"
 
     def update(self, physical, h, x, v):
+        at_time(physical, 0.0)
         a, touches = step_accelerations(physical, x, v, h)
         return x + h * v, v + h * a, touches
 
     def update_vjp(self, physical, h, x, v, touches, x_bar, v_bar, bar):
+        at_time(physical, 0.0)
         a_bar = h * v_bar
         x_bar, v_bar = x_bar.copy(), v_bar + h * x_bar
         step_accelerations_vjp(physical, x, v, h, touches, a_bar, x_bar, v_bar, bar)
@@ -98,7 +110,7 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        if not far_from_planes(physical, h, start, end):
+        if blows(physical) or not far_from_planes(physical, h, start, end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         x, v = start[0], start[1]
         if self.work is None or self.work.shape[1] != len(x):
@@ -120,12 +132,15 @@ class RK4Adjoint(ExplicitAdjoint):
         return x_bar, v_bar
 
     def update(self, physical, h, x, v):
+        at_time(physical, 0.0)
         a1, t1 = step_accelerations(physical, x, v, h)
         x2, v2 = x + h / 2 * v, v + h / 2 * a1
+        at_time(physical, h / 2)
         a2, t2 = step_accelerations(physical, x2, v2, h)
         x3, v3 = x + h / 2 * v2, v + h / 2 * a2
         a3, t3 = step_accelerations(physical, x3, v3, h)
         x4, v4 = x + h * v3, v + h * a3
+        at_time(physical, h)
         a4, t4 = step_accelerations(physical, x4, v4, h)
         stages = ((x2, v2, t2), (x3, v3, t3), (x4, v4, t4), t1)
         if not len(physical.friction):   # no impact pass: the end state is not needed
@@ -144,6 +159,7 @@ class RK4Adjoint(ExplicitAdjoint):
         v_carry, a_carry = np.zeros_like(x), np.zeros_like(x)
         for xk, vk, tk, step, weight in ((x4, v4, t4, h, h / 6), (x3, v3, t3, h / 2, h / 3),
                                          (x2, v2, t2, h / 2, h / 3)):
+            at_time(physical, step)   # stage 4 is at the step's end, 2 and 3 half way
             xk_bar, vk_bar = np.zeros_like(x), weight * x_bar + v_carry
             step_accelerations_vjp(physical, xk, vk, h, tk, weight * v_bar + a_carry, xk_bar,
                                    vk_bar, bar)
@@ -151,6 +167,7 @@ class RK4Adjoint(ExplicitAdjoint):
             out_v += vk_bar
             v_carry, a_carry = step * xk_bar, step * vk_bar
         out_v += h / 6 * x_bar + v_carry           # stage 1 is y itself
+        at_time(physical, 0.0)
         step_accelerations_vjp(physical, x, v, h, t1, h / 6 * v_bar + a_carry, out_x, out_v, bar)
         return out_x, out_v
 
@@ -173,6 +190,7 @@ class ImplicitEulerAdjoint(Adjoint):
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         x, v = start[0], start[1]
         iterations = self.integrator.newton_iterations
+        at_time(physical, h)   # the air at the step's end, as the forward's
         if len(start) == 3 and touches_planes(physical, h, start, end):
             kind, terrain, dampers = start[2]
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar

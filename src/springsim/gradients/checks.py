@@ -2,16 +2,15 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag and pins that hold still; contact with still planes (contact.py,
-implicit_contact.py). Not yet covered, so refused rather than given a gradient that leaves a
-force out: wind, soft pins and pins that move, contact with curved, moving or deforming
-terrains, body-body and ball contact. A terrain the adjoint does not follow may be in the scene
+dampers, gravity, drag, the wind on surfaces (wind.py) and pins that hold still; contact with
+still planes (contact.py, implicit_contact.py). Not yet covered, so refused rather than given a
+gradient that leaves a force out: soft pins and pins that move, contact with curved, moving or
+deforming terrains, body-body and ball contact (and with them the wind on balls). A terrain the adjoint does not follow may be in the scene
 as long as no particle comes within its contact band during the run.
 """
 import numpy as np
 
 from ..errors import SceneError
-from ..wind import ON as WIND_ON
 from .adjoints import ADJOINTS
 
 
@@ -42,9 +41,6 @@ def check_supported(simulation) -> None:
 def check_world_still(model) -> None:
     """Refuses the moving world's forces that the adjoint leaves out (module docstring)."""
     arrays = model.arrays
-    if arrays.wind_settings[WIND_ON]:
-        raise SceneError("wind", "a [wind] table", "blows with a force that gradients do not "
-                         "follow yet: leave it out")
     soft = np.flatnonzero(arrays.pin_stiffness > 0)
     if len(soft):
         raise SceneError("bodies.pins.stiffness", float(arrays.pin_stiffness[soft[0]]),

@@ -39,6 +39,7 @@ from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import along, impacts, impacts_vjp, plane_distance
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
+from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
 FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO = 0, 1, 2
@@ -171,9 +172,9 @@ class Replay(NamedTuple):
     end: tuple            # (x, v) before the impact pass
 
 
-def diagonal_blocks(physical, x_k, h):
-    """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag
-    and every spring's C = p l l^T + q I (physics.system_product)."""
+def diagonal_blocks(physical, x_k, v_k, h):
+    """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag,
+    the wind's blocks and every spring's C = p l l^T + q I (physics.system_product)."""
     springs = geometry(physical, x_k)
     along_, across, _, _, _ = stiffness_coefficients(physical, springs)
     real = springs.length > 0.0
@@ -185,7 +186,7 @@ def diagonal_blocks(physical, x_k, h):
     np.add.at(out, physical.a, blocks)
     np.add.at(out, physical.b, blocks)
     out += (physical.solve_mass + h * physical.drag)[:, None, None] * np.eye(3)
-    return out
+    return out + wind_blocks(physical, x_k, v_k, h)
 
 
 def held(constraints, kind, u0):
@@ -224,10 +225,10 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     for k in range(iterations):
         first = k == 0
         x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
-        matrix = system_matrix(physical, x_k, h)
+        matrix = system_matrix(physical, x_k, v_k, h)
         b_sp = newton_rhs(physical, h, x, v, dv, first)
         u0 = v + dv
-        blocks = diagonal_blocks(physical, x_k, h)
+        blocks = diagonal_blocks(physical, x_k, v_k, h)
         cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
         if first:   # remembered_friction_in_cone
             *cap, lowered = capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c)
@@ -421,7 +422,7 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     first, dv = it.first, it.dv
     x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
     u0 = v + dv
-    matrix = system_matrix(physical, x_k, h)
+    matrix = system_matrix(physical, x_k, v_k, h)
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
     b_bar, u0_bar = np.zeros_like(x), np.zeros_like(x)
     weights = np.zeros((len(x), 3, 3))   # cotangent of each diagonal block (stiffness, cap)
@@ -430,17 +431,18 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     for j in reversed(range(len(steps))):
         step = steps[j]
         if isinstance(step, Solve):
-            solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_bar,
-                          u0_bar, c_bar, floor_bar, xk_bar, bar)
+            solve_adjoint(physical, h, (x_k, v_k), matrix, constraints, step, u0, ddv_bar,
+                          b_bar, u0_bar, c_bar, floor_bar, (xk_bar, vk_bar), bar)
             ddv_bar = np.zeros_like(x)
         else:
             ddv_before = steps[j - 1].ddv
-            update_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_before,
-                           c_bar, ddv_bar, b_bar, u0_bar, weights, xk_bar, bar)
+            update_adjoint(physical, h, (x_k, v_k), matrix, constraints, step, u0, ddv_before,
+                           c_bar, ddv_bar, b_bar, u0_bar, weights, (xk_bar, vk_bar), bar)
     if first and len(it.cap[0]):
-        cap_adjoint(physical, h, x_k, constraints, it.cap, c_bar, b_bar, u0_bar, floor_bar,
-                    weights, u0, bar)
+        cap_adjoint(physical, h, (x_k, v_k), constraints, it.cap, c_bar, b_bar, u0_bar,
+                    floor_bar, weights, u0, bar)
     diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar)
+    wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
     dv_start_bar = dv_bar + u0_bar - physical.solve_mass[:, None] * b_bar
     rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, b_bar, out_x, out_v, xk_bar, vk_bar, bar)
     out_v += u0_bar
@@ -454,11 +456,11 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     return dv_start_bar, c_bar
 
 
-def solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_bar, u0_bar, c_bar,
-                  floor_bar, xk_bar, bar):
+def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar, b_bar, u0_bar,
+                  c_bar, floor_bar, estimate_bar, bar):
     """ddv = solve(A_sp + C(c), b_sp - c T u0, z(floor, u0)): lambda = (Q^T A Q)^-1 Q^T ddv_bar
     (A symmetric), then b's cotangent is lambda, A's -lambda ddv^T, z's (I - S)(ddv_bar -
-    A lambda)."""
+    A lambda). ``estimate``: (x_k, v_k), with their cotangents ``estimate_bar``."""
     kind, c, ddv = step.kind, step.c, step.ddv
     contact = np.nonzero(kind == CONTACT)[0]
     normal = constraints.normal
@@ -467,7 +469,7 @@ def solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_ba
     q = basis(kind, normal)
     lam = solve_reduced(a, ddv_bar, np.zeros_like(ddv_bar), q)
     b_bar += lam
-    system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
+    matrix_vjp(physical, h, estimate, ddv, -lam, estimate_bar, bar)
     n = normal[contact]
     lam_t = tangential(lam[contact], n)
     c_bar[contact] -= rowdot(lam_t, ddv[contact]) + rowdot(lam_t, u0[contact])
@@ -478,8 +480,8 @@ def solve_adjoint(physical, h, x_k, matrix, constraints, step, u0, ddv_bar, b_ba
     u0_bar[contact] -= gap_bar[:, None] * n
 
 
-def update_adjoint(physical, h, x_k, matrix, constraints, update, u0, ddv, c_bar, ddv_bar, b_bar,
-                   u0_bar, weights, xk_bar, bar):
+def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, c_bar, ddv_bar,
+                   b_bar, u0_bar, weights, estimate_bar, bar):
     """The dampers chosen from the solve before (constraints.coulomb_damping), backwards."""
     c_bar[update.released] = 0.0
     c_bar[update.grown] = 0.0
@@ -510,13 +512,13 @@ def update_adjoint(physical, h, x_k, matrix, constraints, update, u0, ddv, c_bar
     g_r = np.zeros_like(u0)
     g_r[index] = impulse_bar[:, None] * n
     ddv_bar += (matrix @ g_r.ravel()).reshape(g_r.shape)
-    system_product_vjp(physical, x_k, ddv, g_r, h, xk_bar, bar)
+    matrix_vjp(physical, h, estimate, ddv, g_r, estimate_bar, bar)
     b_bar -= g_r
     # stiffness = (tr B - n^T B n) / 2
     weights[index] += 0.5 * stiff_bar[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
 
 
-def cap_adjoint(physical, h, x_k, constraints, cap, c_bar, b_bar, u0_bar, floor_bar, weights,
+def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, floor_bar, weights,
                 u0, bar):
     """c = friction max(impulse, 0) / slip for the carried dampers the cone capped, with
     impulse = -b_sp . n + gap n^T B n and gap = floor - n . u0."""
@@ -534,11 +536,17 @@ def cap_adjoint(physical, h, x_k, constraints, cap, c_bar, b_bar, u0_bar, floor_
     n = constraints.normal[index]
     u0_bar[index] += (slip_bar / safe)[:, None] * tangential(u0[index], n)
     b_bar[index] -= impulse_bar[:, None] * n
-    blocks = diagonal_blocks(physical, x_k, h)[index]
+    blocks = diagonal_blocks(physical, *estimate, h)[index]
     gap_bar = impulse_bar * np.einsum("ki,kij,kj->k", n, blocks, n)
     floor_bar[index] += gap_bar
     u0_bar[index] -= gap_bar[:, None] * n
     weights[index] += (impulse_bar * gap)[:, None, None] * n[:, :, None] * n[:, None, :]
+
+
+def matrix_vjp(physical, h, estimate, u, g, estimate_bar, bar):
+    """Add g . d(A u)/d(x_k, v_k, parameters), u held fixed: the springs' and the wind's."""
+    system_product_vjp(physical, estimate[0], u, g, h, estimate_bar[0], bar)
+    wind_blocks_vjp(physical, *estimate, h, outer_weights(g, u), *estimate_bar, bar)
 
 
 def diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar):

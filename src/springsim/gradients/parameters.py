@@ -7,9 +7,11 @@ Two kinds, an open set (``parameter`` tries each kind in PARAMETER_KINDS):
   writes it: ``bodies.0.structural.ks``, ``gravity``, ``drag``, ``bodies.0.particle_mass``,
   ``bodies.0.velocity``, ``bodies.0.edge_length``. How the model depends on it is found by
   building the model at value +- delta (model.build_model): the springs' ks, kd and rest
-  lengths, the masses, drag, gravity and the initial state are linear in every such key, so the
-  difference is exact to rounding. A key that changes anything else of the model (a terrain, the
-  lattice) is refused as not differentiable.
+  lengths, the masses, drag, gravity, the wind's settings and keys and the initial state are
+  linear in every such key, so the difference is exact to rounding (``wind.gusts.length``
+  enters the gust modes as its inverse: exact to delta^2, about 1e-8 of the value). A key that
+  changes anything else of the model (a terrain, the lattice) is refused as not
+  differentiable.
 - ``ModelArray``: one of the model's own arrays, set on the built model: ``initial_positions``,
   ``initial_velocities`` (P, 3), ``masses`` (P,), ``rest_lengths``, ``spring_ks``, ``spring_kd``
   (S,), and ``bodies.N.stiffness_field``, a scale on each spring of body N (1: the scene's ks).
@@ -33,12 +35,13 @@ from .physics import Physical
 # the model arrays that the adjoint covers (Physical) and that a SceneValue may change
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
            "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
-           "terrain_restitution"}
+           "terrain_restitution", "wind_settings", "wind_keys", "wind_modes"}
 # The model's work space, which the kernels write while they run (model.py): not a parameter
 WORK_SPACE = {"clock", "motion_pose"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
 # Physical's fields with a cotangent (physics.Cotangents), which a SceneValue's tangents cover
-DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution")
+DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution",
+                  "wind_settings", "wind_keys", "wind_modes")
 
 
 def parameter(scene, name):

@@ -22,6 +22,7 @@ import numpy as np
 
 from . import kernels
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
+from .wind import wind_blocks_vjp, wind_forces, wind_forces_vjp, outer_weights
 
 
 class Physical(NamedTuple):
@@ -39,6 +40,12 @@ class Physical(NamedTuple):
     friction: np.ndarray      # (T,) the terrains' Coulomb friction
     restitution: np.ndarray   # (T,) and restitution
     planes: Planes            # the terrains as contact needs them (contact.py)
+    wind_settings: np.ndarray   # (6,) wind.pack_wind's: density, C_d, C_f, gusts, on
+    wind_keys: np.ndarray       # (K, 4) the mean wind's keys: time, velocity
+    wind_modes: np.ndarray      # (M, 8) the gust modes: direction, wave vector, frequency, phase
+    wind_triangles: np.ndarray  # (T, 3) the triangles the wind pushes
+    wind_weights: np.ndarray    # (T,) their weights (wind.quads_both_ways)
+    clock: np.ndarray           # (2,) s: the step's start and the wind's time (wind.py here)
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -50,7 +57,11 @@ class Physical(NamedTuple):
                    arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
                    arrays.springs[:, 1].astype(np.int64),
                    arrays.terrain_friction.astype(float),
-                   arrays.terrain_restitution.astype(float), Planes.of(model))
+                   arrays.terrain_restitution.astype(float), Planes.of(model),
+                   arrays.wind_settings.astype(float), arrays.wind_keys.astype(float),
+                   arrays.wind_modes.astype(float),
+                   arrays.wind_triangles.astype(np.int64).reshape(-1, 3),
+                   arrays.wind_weights.astype(float), np.zeros(2))
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -75,6 +86,9 @@ class Cotangents:
     gravity: np.ndarray
     friction: np.ndarray
     restitution: np.ndarray
+    wind_settings: np.ndarray
+    wind_keys: np.ndarray
+    wind_modes: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
@@ -153,24 +167,26 @@ def reference_spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar,
 # --- accelerations (the explicit methods' derivative) -------------------------------------------
 
 def accelerations(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """dv/dt before contact: forces.free_accelerations."""
+    """dv/dt before contact: forces.free_accelerations (the wind at physical.clock's time)."""
     w = physical.inv_mass
     force = spring_forces(physical, x, v)
     return (w[:, None] * (force - physical.drag[:, None] * v)
-            + np.where(physical.free[:, None], physical.gravity, 0.0))
+            + np.where(physical.free[:, None], physical.gravity, 0.0)
+            + w[:, None] * wind_forces(physical, x, v))
 
 
 def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
     """Add g . d(accelerations)/d(everything) into x_bar, v_bar and bar."""
     w = physical.inv_mass
     force = spring_forces(physical, x, v)
-    net = force - physical.drag[:, None] * v
+    net = force - physical.drag[:, None] * v + wind_forces(physical, x, v)
     free = physical.free
     bar.gravity += g[free].sum(axis=0)
     bar.mass -= np.where(free, w * w * dot(g, net), 0.0)
     bar.drag -= w * dot(g, v)
     v_bar -= (w * physical.drag)[:, None] * g
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+    wind_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
 
 
 def step_accelerations(physical: Physical, x, v, h):

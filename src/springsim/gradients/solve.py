@@ -22,6 +22,7 @@ from .physics import (
     stiffness_product_vjp,
     system_product_vjp,
 )
+from .wind import blows, outer_weights, wind_blocks, wind_blocks_vjp, wind_forces, wind_forces_vjp
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
 DIRECT_LIMIT = 6000         # unknowns up to which a sparse LU solves (exact, and quick there)
@@ -53,12 +54,15 @@ class ForwardSolver:
         self.max_iterations = integrator.cg_max_iterations
         self.iterations = 0   # CG iterations, for diagnostics
 
-    def assemble(self, x, h):
-        """The system matrix A at positions x (kept for ``solve``)."""
+    def assemble(self, physical, x, v, h):
+        """The system matrix A at the estimate (x, v) (kept for ``solve``); v enters through the
+        wind's blocks alone."""
         from ..implicit.jacobian import assemble_diagonal_and_terms
 
         assemble_diagonal_and_terms(self.arrays, self.layout.diagonal, x, 1.0, h, h * h,
                                     self.blocks, self.terms)
+        if blows(physical):
+            self.blocks[self.layout.diagonal.diagonal_slot] += wind_blocks(physical, x, v, h)
 
     def solve(self, rhs):
         """u with A u = rhs on the free particles (zero on the pinned ones)."""
@@ -74,9 +78,10 @@ class ForwardSolver:
         return u
 
 
-def system_matrix(physical, x, h):
-    """A at x as a sparse (3P, 3P) matrix: the diagonal masses and drag, and every spring's
-    block C = p l l^T + q I added to (a, a), (b, b) and subtracted from (a, b), (b, a)."""
+def system_matrix(physical, x, v, h):
+    """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag, the
+    wind's blocks, and every spring's block C = p l l^T + q I added to (a, a), (b, b) and
+    subtracted from (a, b), (b, a)."""
     count = x.shape[0]
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -95,6 +100,11 @@ def system_matrix(physical, x, h):
     rows.append(np.arange(3 * count))
     cols.append(np.arange(3 * count))
     values.append(diagonal)
+    if blows(physical):
+        particle = 3 * np.arange(count)[:, None, None]
+        rows.append((particle + np.arange(3)[None, :, None]).repeat(3, axis=2))
+        cols.append((particle + np.arange(3)[None, None, :]).repeat(3, axis=1))
+        values.append(wind_blocks(physical, x, v, h))
     matrix = sparse.coo_matrix((np.concatenate([v.ravel() for v in values]),
                                 (np.concatenate([r.ravel() for r in rows]),
                                  np.concatenate([c.ravel() for c in cols]))),
@@ -128,6 +138,7 @@ def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, v
     bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
     bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
     vk_bar -= h * physical.drag[:, None] * lam
+    wind_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     if first:
         stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
 
@@ -141,10 +152,11 @@ def estimate(x, v, dv, h, first):
 
 
 def newton_rhs(physical, h, x, v, dv, first):
-    """r_k = h (F(x_k, v_k) + m g - c v_k) - M dv_k (+ h^2 dF/dx(x) v in the first)."""
+    """r_k = h (F(x_k, v_k) + m g - c v_k) - M dv_k (+ h^2 dF/dx(x) v in the first); F with
+    the wind's force."""
     x_k, v_k = estimate(x, v, dv, h, first)
     external = (np.where(physical.free[:, None], physical.mass[:, None] * physical.gravity, 0.0)
-                - physical.drag[:, None] * v_k)
+                - physical.drag[:, None] * v_k + wind_forces(physical, x_k, v_k))
     rhs = h * (spring_forces(physical, x_k, v_k) + external) - physical.solve_mass[:, None] * dv
     if first:
         rhs += h * h * stiffness_product(physical, x, v)
@@ -157,9 +169,9 @@ def newton_estimates(physical, h, x, v, dv_end, iterations, solver):
     ForwardSolver)."""
     dv = [np.zeros_like(x)]
     for k in range(iterations - 1):
-        x_k, _ = estimate(x, v, dv[-1], h, k == 0)
+        x_k, v_k = estimate(x, v, dv[-1], h, k == 0)
         rhs = newton_rhs(physical, h, x, v, dv[-1], k == 0)
-        solver.assemble(x_k, h)
+        solver.assemble(physical, x_k, v_k, h)
         dv.append(dv[-1] + solver.solve(rhs))
     dv.append(dv_end)
     return dv
@@ -170,7 +182,7 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     """The adjoint of dv_next = dv + A(x_k)^-1 r_k: adds the cotangents of x, v and the
     parameters, returns that of dv."""
     x_k, v_k = estimate(x, v, dv, h, first)
-    solver.assemble(x_k, h)
+    solver.assemble(physical, x_k, v_k, h)
     lam = solver.solve(dv_bar)          # A symmetric: A^-T = A^-1
     ddv = dv_next - dv
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
@@ -179,6 +191,7 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
+    wind_blocks_vjp(physical, x_k, v_k, h, outer_weights(-lam, ddv), xk_bar, vk_bar, bar)
     x_bar += xk_bar
     v_bar += vk_bar
     if not first:   # x_k = x + h (v + dv), v_k = v + dv

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .physics import Cotangents
+from .wind import STEP_START
 
 DEFAULT_MEMORY_LIMIT = 1 << 30   # bytes of stored states (the bar: a 10 s run < 2 GB)
 
@@ -25,6 +26,7 @@ class Tape:
     stride: int
     states: list          # [(x, v)] per step when stride == 1, else full State every stride steps
     stored_bytes: int = 0
+    start_time: float = 0.0   # s, the first state's
 
 
 def plan_stride(steps: int, particles: int, memory_limit: int) -> int:
@@ -63,6 +65,7 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
     wanted = {int(s): k for k, s in enumerate(frame_steps)}
     frames = np.empty((len(frame_steps), particles, 3))
     states, stored = [], 0
+    start_time = simulation.state.time
     for n in range(steps + 1):
         state = simulation.state
         if n in wanted:
@@ -75,7 +78,8 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
             stored += particles * 48
         if n < steps:
             simulation.step(1)
-    return frames, Tape(steps, stride, states, stored + (stride > 1) * stride * particles * 48)
+    return frames, Tape(steps, stride, states, stored + (stride > 1) * stride * particles * 48,
+                        start_time)
 
 
 def stretch(simulation, tape: Tape, first: int):
@@ -114,6 +118,7 @@ def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars,
         start, end = states[n - 1 - first], states[n - first]
         if check is not None:
             check(n - 1, start)
+        physical.clock[STEP_START] = tape.start_time + (n - 1) * h
         x_bar, v_bar = adjoint.step_vjp(physical, h, start, end, x_bar, v_bar, bar)
     for g in inject.get(0, ()):
         x_bar += g

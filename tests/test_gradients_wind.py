@@ -1,0 +1,95 @@
+"""Gradients through the wind (gradients/wind.py) against central finite differences of the
+forward run: the wind's velocity, keys and settings, and the model's parameters with the wind
+blowing, under each integrator with an adjoint, on a cube, a cloth and a cube sliding on a
+tilted plane."""
+import numpy as np
+import pytest
+
+from springsim.bodies.cloth import Cloth
+from springsim.gradients import gradient
+from springsim.gradients.parameters import parameter
+from springsim.scene import Scene
+from springsim.springs import SpringParameters
+from springsim.wind import Gusts, Wind, WindKey
+from test_gradients import (STEPS, TIGHT, central_difference, small_scene, tilted_scene,
+                            weighted_squares)
+
+WIND_KEYS = ["wind.velocity", "wind.density", "wind.drag", "wind.friction",
+             "wind.gusts.strength", "wind.gusts.length", "bodies.0.structural.ks",
+             "bodies.0.velocity"]
+
+
+def gusty(scene):
+    scene.wind = Wind(velocity=(8.0, 1.0, -3.0), density=1.2, drag=1.2, friction=0.05,
+                      gusts=Gusts(strength=0.4, length=0.7, seed=3))
+    return scene
+
+
+def flag():
+    """A light 4 x 4 cloth pinned along one edge, broadside to a gusty wind (springs soft
+    enough for the explicit methods' step)."""
+    springs = SpringParameters(ks=2000.0, kd=5.0)
+    cloth = Cloth(particles_per_edge=4, width=1.0, height=1.0, position=(0.0, 2.0, 0.0),
+                  particle_mass=0.2, structural=springs, shear=springs, bend=springs,
+                  pinned="edge", self_collision=False)
+    return gusty(Scene(bodies=[cloth], terrains=[], drag=0.1))
+
+
+def keyed():
+    """The tilted plane's landing cube in a wind keyed to turn within the run (the second key
+    between steps, away from a stage's time: the interpolation has a kink at a key)."""
+    scene = tilted_scene("lands and slides")
+    scene.wind = Wind(keyframes=[WindKey(0.0, (2.0, 0.0, 1.0)), WindKey(0.0113, (-6.0, 4.0, 2.0))],
+                      density=1.2, drag=1.5, friction=0.1, gusts=Gusts(strength=0.3, length=0.8,
+                                                                       seed=2))
+    return scene
+
+
+SCENES = {"cube": lambda: gusty(small_scene()), "flag": flag, "keyed": keyed}
+NAMES = {"cube": WIND_KEYS, "flag": ["wind.velocity", "bodies.0.structural.ks"],
+         "keyed": ["wind.keyframes.1.velocity", "wind.keyframes.1.time",
+                   "terrains.0.friction"]}
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_wind_gradients_match_finite_differences(integrator, case):
+    names = NAMES[case]
+    dt = STEPS[integrator]
+    _, grads = gradient(SCENES[case](), weighted_squares, names, duration=10 * dt,
+                        integrator=integrator, dt=dt, fps=1 / (4 * dt),
+                        **TIGHT.get(integrator, {}))
+    for name in names:
+        base = parameter(SCENES[case](), name).value
+        for j in range(base.size):
+            step = 1e-5 * max(abs(base.ravel()[j]), 1.0)
+            expected = central_difference(SCENES[case](), integrator, name, base, j, step)
+            got = np.ravel(grads[name])[j]
+            assert got == pytest.approx(expected, rel=1e-5, abs=1e-7), (name, j)
+
+
+def test_wind_terms_match_the_kernels():
+    """The NumPy wind (the adjoint's) against the simulation's kernels, force and blocks, on a
+    gusty cloth at an arbitrary time."""
+    from springsim.gradients.physics import Physical
+    from springsim.gradients.wind import WIND_TIME, wind_blocks, wind_forces
+    from springsim.implicit.pattern import diagonal_pattern
+    from springsim.model import build_model
+    from springsim.wind import add_wind_forces, add_wind_with_jacobian
+
+    model = build_model(flag())
+    rng = np.random.default_rng(4)
+    x = model.initial_positions + rng.normal(0.0, 0.02, model.initial_positions.shape)
+    v = rng.normal(0.0, 1.0, x.shape)
+    t, h = 0.37, 0.01
+    model.arrays.clock[2] = t
+    physical = Physical.of(model)
+    physical.clock[WIND_TIME] = t
+    force = np.zeros_like(x)
+    add_wind_forces(model.arrays, x, v, np.ones(1), force)
+    np.testing.assert_allclose(wind_forces(physical, x, v), force, rtol=1e-12, atol=1e-14)
+    pattern = diagonal_pattern(len(x))
+    blocks, impulse = np.zeros((len(x), 3, 3)), np.zeros_like(x)
+    add_wind_with_jacobian(model.arrays, pattern.diagonal_slot, x, v, h, impulse, blocks)
+    np.testing.assert_allclose(wind_blocks(physical, x, v, h), blocks[pattern.diagonal_slot],
+                               rtol=1e-12, atol=1e-14)
