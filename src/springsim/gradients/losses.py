@@ -32,7 +32,7 @@ def steps_of(times, dt, key):
     off = np.abs(steps * dt - times) > TIME_MATCH * dt + 1e-12
     if off.any():
         k = int(np.argmax(off))
-        raise SceneError(key, f"time {times[k]!r} s",
+        raise SceneError(key, f"time {float(times[k])!r} s",
                          f"is not a whole number of steps of dt = {dt:g} s: choose a dt that "
                          "divides the observed times (the take's time base)")
     return steps.astype(np.int64)
