@@ -6,13 +6,10 @@ import numpy as np
 import pytest
 
 from springsim.bodies.cloth import Cloth
-from springsim.gradients import gradient
-from springsim.gradients.parameters import parameter
 from springsim.scene import Scene
 from springsim.springs import SpringParameters
 from springsim.wind import Gusts, Wind, WindKey
-from test_gradients import (STEPS, TIGHT, central_difference, small_scene, tilted_scene,
-                            weighted_squares)
+from test_gradients import STEPS, assert_gradients_match, small_scene, tilted_scene
 
 WIND_KEYS = ["wind.velocity", "wind.density", "wind.drag", "wind.friction",
              "wind.gusts.strength", "wind.gusts.length", "bodies.0.structural.ks",
@@ -54,18 +51,7 @@ NAMES = {"cube": WIND_KEYS, "flag": ["wind.velocity", "bodies.0.structural.ks"],
 @pytest.mark.parametrize("case", list(SCENES))
 @pytest.mark.parametrize("integrator", list(STEPS))
 def test_wind_gradients_match_finite_differences(integrator, case):
-    names = NAMES[case]
-    dt = STEPS[integrator]
-    _, grads = gradient(SCENES[case](), weighted_squares, names, duration=10 * dt,
-                        integrator=integrator, dt=dt, fps=1 / (4 * dt),
-                        **TIGHT.get(integrator, {}))
-    for name in names:
-        base = parameter(SCENES[case](), name).value
-        for j in range(base.size):
-            step = 1e-5 * max(abs(base.ravel()[j]), 1.0)
-            expected = central_difference(SCENES[case](), integrator, name, base, j, step)
-            got = np.ravel(grads[name])[j]
-            assert got == pytest.approx(expected, rel=1e-5, abs=1e-7), (name, j)
+    assert_gradients_match(SCENES[case], integrator, NAMES[case])
 
 
 def test_wind_terms_match_the_kernels():

@@ -8,13 +8,13 @@ equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)
 recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
 start, the step's start time in ``physical.clock`` (tape.backward sets it); each force
 evaluation sets the wind's time there first, as the forward's stages move the world. The
-explicit methods' terrain contact (planes: contact.py) is in their force evaluations
+explicit methods' terrain contact (still planes, spheres and bowls: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
 in NumPy from the step's start to know what it did.
 """
 import numpy as np
 
-from .contact import far_from_planes, impacts, impacts_vjp
+from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
@@ -110,7 +110,7 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        if blows(physical) or not far_from_planes(physical, h, start, end):
+        if blows(physical) or not far_from_terrains(physical, h, start, end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         x, v = start[0], start[1]
         if self.work is None or self.work.shape[1] != len(x):

@@ -17,14 +17,17 @@ restitution); the gradient is that branch's derivative. Where a particle changes
 touches down, leaves, starts or stops sliding, bounces) the motion has a kink or a jump and the
 gradient is the one-sided derivative of the branch the run took: finite, never NaN.
 
-Planes only: a plane's normal is the same everywhere, so the contact depends on positions only
-through which branch a particle takes. A curved terrain's normal turns with the position (its
-curvature would enter the gradient); such a terrain touched during a run is refused
-(gradients/checks.py).
+Still planes, spheres and bowls (terrain_shapes.py): a plane's normal is the same everywhere, so
+the contact depends on positions only through which branch a particle takes; a sphere's turns
+with the position, and its derivative (the curvature) carries the normal's cotangent to the
+positions. Other terrains touched during a run are refused (gradients/checks.py).
+Backward Euler's contact (implicit_contact.py) follows planes only.
 """
 from typing import NamedTuple
 
 import numpy as np
+
+from .terrain_shapes import shape_of
 
 
 class Planes(NamedTuple):
@@ -37,6 +40,7 @@ class Planes(NamedTuple):
     offset: np.ndarray      # (P,) m, kept between a particle and a terrain
     is_plane: np.ndarray    # (T,) bool
     resting_speed: np.ndarray   # (T,) m/s, approaches slower than this do not bounce
+    shapes: tuple = ()      # (T,) terrain_shapes' shape of each still terrain followed, or None
 
     @classmethod
     def of(cls, model) -> "Planes":
@@ -46,15 +50,18 @@ class Planes(NamedTuple):
         count = len(model.terrains)
         point, normal = np.full((count, 3), np.nan), np.full((count, 3), np.nan)
         is_plane = np.zeros(count, bool)
+        shapes = []
         for t, terrain in enumerate(model.terrains):
+            row = arrays.terrain_parameters[t]
+            still = arrays.terrain_motion[t] < 0 and arrays.terrain_deforming[t] < 0
+            shapes.append(shape_of(terrain, row) if still else None)
             if isinstance(terrain, Plane):
-                row = arrays.terrain_parameters[t]
                 point[t], normal[t], is_plane[t] = row[0:3], row[3:6], True
         g = arrays.gravity
         g_size = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
         epsilon = arrays.terrain_epsilon.astype(float)
         return cls(point, normal, epsilon, arrays.terrain_offset.astype(float), is_plane,
-                   np.sqrt(2.0 * g_size * epsilon))
+                   np.sqrt(2.0 * g_size * epsilon), tuple(shapes))
 
 
 def plane_distance(planes: Planes, t: int, x: np.ndarray) -> np.ndarray:
@@ -65,22 +72,29 @@ def plane_distance(planes: Planes, t: int, x: np.ndarray) -> np.ndarray:
 
 
 def along(u: np.ndarray, n: np.ndarray) -> np.ndarray:
-    return u[:, 0] * n[0] + u[:, 1] * n[1] + u[:, 2] * n[2]
+    """u . n per row; n one normal (3,) or one per row (K, 3)."""
+    return u[:, 0] * n[..., 0] + u[:, 1] * n[..., 1] + u[:, 2] * n[..., 2]
 
 
-def far_from_planes(physical, h, start, end) -> bool:
-    """Whether no stage of a step can have touched a plane: every free particle starts and ends
-    it farther from each plane than the band and twice the distance its fastest particle
-    covers in a step (an explicit step's stages stay within h |v| of its start, near enough).
-    The adjoint then skips contact (run_kernels.rk4_step_vjp)."""
+def followed(planes: Planes):
+    """(t, shape) of every terrain the explicit methods' contact adjoint follows."""
+    return [(t, shape) for t, shape in enumerate(planes.shapes) if shape is not None]
+
+
+def far_from_terrains(physical, h, start, end) -> bool:
+    """Whether no stage of a step can have touched a followed terrain: every free particle
+    starts and ends it farther from each than the band and twice the distance its fastest
+    particle covers in a step (an explicit step's stages stay within h |v| of its start, near
+    enough). The adjoint then skips contact (run_kernels.rk4_step_vjp)."""
     planes = physical.planes
-    if not planes.is_plane.any():
+    shapes = followed(planes)
+    if not shapes:
         return True
     (x, v), (x_end, v_end) = start[:2], end[:2]
     speed = max(np.sqrt(np.max(np.einsum("ij,ij->i", v, v))),
                 np.sqrt(np.max(np.einsum("ij,ij->i", v_end, v_end))))
-    for t in np.nonzero(planes.is_plane)[0]:
-        near = np.minimum(plane_distance(planes, t, x), plane_distance(planes, t, x_end))
+    for t, shape in shapes:
+        near = np.minimum(shape.distance(x, planes.offset), shape.distance(x_end, planes.offset))
         if np.any(physical.free & (near < planes.epsilon[t] + 2.0 * h * speed)):
             return False
     return True
@@ -89,6 +103,7 @@ def far_from_planes(physical, h, start, end) -> bool:
 # --- the reaction and friction inside each force evaluation --------------------------------------
 
 STICK, KINETIC, SLOWING = 0, 1, 2
+STEP = 1e-30   # normal_vjp's complex step
 
 
 class Touch(NamedTuple):
@@ -98,62 +113,97 @@ class Touch(NamedTuple):
     a: np.ndarray        # (K, 3) their accelerations before it
     v: np.ndarray        # (K, 3) their velocities
     case: np.ndarray     # (K,) STICK, KINETIC or SLOWING (coulomb_friction's branches)
+    n: np.ndarray        # (K, 3) the terrain's normal at each
+    curvature: np.ndarray | None   # (K, 3, 3) dn/dx there, None for a plane
 
 
 def contact_accelerations(physical, x, v, h, a):
     """(a after contact, [Touch or None per terrain]): apply_contact_forces."""
     planes = physical.planes
-    touches = []
-    for t in range(len(planes.epsilon)):
-        if not planes.is_plane[t]:
-            touches.append(None)
-            continue
-        n = planes.normal[t]
-        phi = plane_distance(planes, t, x)
+    touches = [None] * len(planes.epsilon)
+    for t, shape in followed(planes):
+        n = shape.normals(x)
+        phi = shape.distance(x, planes.offset)
         a_n, v_n = along(a, n), along(v, n)
         reaction = -a_n - np.maximum(v_n, 0.0) / h
         index = np.nonzero(physical.free & (phi < planes.epsilon[t]) & (reaction > 0.0))[0]
         if not len(index):
-            touches.append(None)
             continue
-        ai, vi = a[index], v[index]
-        new, case = touched(ai, vi, n, physical.friction[t], h)
+        ai, vi, ni = a[index], v[index], n[index]
+        new, case = touched(ai, vi, ni, physical.friction[t], h)
         a = a.copy()
         a[index] = new
-        touches.append(Touch(index, ai, vi, case))
+        touches[t] = Touch(index, ai, vi, case, ni, shape.curvature(x[index]))
     return a, touches
 
 
 def touched(a, v, n, friction, h):
-    """(the accelerations after contact, coulomb_friction's branch) of particles in contact."""
+    """(the accelerations after contact, coulomb_friction's branch) of particles in contact,
+    n one normal per particle."""
     a_n, v_n = along(a, n), along(v, n)
     reaction = -a_n - np.maximum(v_n, 0.0) / h
-    at = np.stack([a[:, c] - a_n * n[c] for c in range(3)], axis=1)
-    vt = np.stack([v[:, c] - v_n * n[c] for c in range(3)], axis=1)
+    at = a - a_n[:, None] * n
+    vt = v - v_n[:, None] * n
     limit = friction * reaction
     s = -(at + vt / h)
     stick = np.sqrt(s[:, 0] * s[:, 0] + s[:, 1] * s[:, 1] + s[:, 2] * s[:, 2])
     speed = np.sqrt(vt[:, 0] * vt[:, 0] + vt[:, 1] * vt[:, 1] + vt[:, 2] * vt[:, 2])
     case = np.where(stick <= limit, STICK, np.where(speed > limit * h, KINETIC, SLOWING))
-    f = s.copy()
+    return response(a, v, n, friction, h, case, v_n > 0.0), case
+
+
+def response(a, v, n, friction, h, case, leaving):
+    """``touched``'s accelerations on the branches ``case`` and ``leaving`` (v . n > 0), for
+    real or complex inputs (contact_normal_vjp steps the normal into the complex plane)."""
+    a_n, v_n = along(a, n), along(v, n)
+    reaction = -a_n - np.where(leaving, v_n, 0.0) / h
+    at = a - a_n[:, None] * n
+    vt = v - v_n[:, None] * n
+    limit = friction * reaction
+    s = -(at + vt / h)
+    stick = np.sqrt(np.sum(s * s, axis=1))
+    speed = np.sqrt(np.sum(vt * vt, axis=1))
     kinetic, slowing = case == KINETIC, case == SLOWING
-    f[kinetic] = -limit[kinetic, None] * vt[kinetic] / speed[kinetic, None]
-    f[slowing] = limit[slowing, None] * s[slowing] / stick[slowing, None]
-    a_normal = a_n + reaction
-    return np.stack([at[:, c] + f[:, c] + a_normal * n[c] for c in range(3)], axis=1), case
+    f = np.where(kinetic[:, None], -limit[:, None] * vt / np.where(kinetic, speed, 1.0)[:, None],
+                 np.where(slowing[:, None],
+                          limit[:, None] * s / np.where(slowing, stick, 1.0)[:, None], s))
+    return at + f + (a_n + reaction)[:, None] * n
 
 
-def contact_accelerations_vjp(physical, h, touches, g, v_bar, bar):
+def normal_vjp(touch, friction, h, g):
+    """The cotangent of each touched particle's normal (K, 3), by complex steps of
+    ``response`` on the branches the run took (exact to rounding, as a written-out
+    derivative)."""
+    leaving = along(touch.v, touch.n) > 0.0
+    n_bar = np.empty_like(touch.n)
+    for c in range(3):
+        n = touch.n.astype(complex)
+        n[:, c] += 1j * STEP
+        moved = response(touch.a, touch.v, n, friction, h, touch.case, leaving)
+        n_bar[:, c] = np.sum(g * moved.imag, axis=1) / STEP
+    return n_bar
+
+
+def add_curvature(rows, curvature, n_bar, x_bar):
+    """x_bar[rows] += (dn/dx)^T n_bar (the curvature is symmetric); nothing for a plane."""
+    if curvature is not None:
+        np.add.at(x_bar, rows, np.einsum("kij,kj->ki", curvature, n_bar))
+
+
+def contact_accelerations_vjp(physical, h, touches, g, x_bar, v_bar, bar):
     """The cotangent of the accelerations before contact, given g on those after; adds the
-    velocities' share into v_bar and friction's into bar.friction. Terrains in reverse."""
-    planes = physical.planes
+    positions' share (a curved terrain's normal) into x_bar, the velocities' into v_bar and
+    friction's into bar.friction. Terrains in reverse."""
     g = g.copy()
     for t in reversed(range(len(touches))):
         touch = touches[t]
         if touch is None:
             continue
-        a_bar, vi_bar, friction_bar = touched_vjp(touch, planes.normal[t],
-                                                  physical.friction[t], h, g[touch.index])
+        gi = g[touch.index]
+        a_bar, vi_bar, friction_bar = touched_vjp(touch, touch.n, physical.friction[t], h, gi)
+        if touch.curvature is not None:
+            add_curvature(touch.index, touch.curvature,
+                          normal_vjp(touch, physical.friction[t], h, gi), x_bar)
         g[touch.index] = a_bar
         np.add.at(v_bar, touch.index, vi_bar)
         bar.friction[t] += friction_bar
@@ -208,62 +258,77 @@ def touched_vjp(touch, n, friction, h, g):
 
 class Impact(NamedTuple):
     """What one terrain's impact pass did: particles whose normal velocity it took away
-    (``bounced``, with the restitution used, e or 0) and those it moved out (``lifted``)."""
+    (``bounced``, with the restitution used, e or 0) and those it moved out (``lifted``), with
+    the normal, its curvature (None for a plane) and what they were."""
 
     bounced: np.ndarray
     fast: np.ndarray      # (len(bounced),) bool: reflected with the terrain's restitution
     v_n: np.ndarray       # their approach speeds
     lifted: np.ndarray
+    v: np.ndarray         # (len(bounced), 3) the bounced particles' velocities before
+    n: np.ndarray         # (P, 3) the terrain's normal at every particle, before lifting
+    phi: np.ndarray       # (P,) and the distance
+    curvature: object     # shape.curvature, called for the rows that need it
 
 
 def impacts(physical, x, v):
     """(x, v, [Impact or None per terrain]) after resolve_terrain_impacts."""
     planes = physical.planes
-    found = []
-    for t in range(len(planes.epsilon)):
-        if not planes.is_plane[t]:
-            found.append(None)
-            continue
-        n = planes.normal[t]
-        phi = plane_distance(planes, t, x)
+    found = [None] * len(planes.epsilon)
+    for t, shape in followed(planes):
+        n = shape.normals(x)
+        phi = shape.distance(x, planes.offset)
         v_n = along(v, n)
         band = physical.free & (phi < planes.epsilon[t])
         bounced = np.nonzero(band & (v_n < 0.0))[0]
         lifted = np.nonzero(band & (phi < 0.0))[0]
         if not len(bounced) and not len(lifted):
-            found.append(None)
             continue
         vb = v_n[bounced]
         fast = -vb > planes.resting_speed[t]
         e = np.where(fast, physical.restitution[t], 0.0)
         bounce = (1.0 + e) * vb
+        before = v[bounced]
         v = v.copy()
-        for c in range(3):
-            v[bounced, c] -= bounce * n[c]
+        v[bounced] -= bounce[:, None] * n[bounced]
         if len(lifted):
-            x = x.copy()
-            depth = phi[lifted]
-            for c in range(3):
-                x[lifted, c] -= depth * n[c]
-        found.append(Impact(bounced, fast, vb, lifted))
+            x_before, x = x, x.copy()
+            x[lifted] -= phi[lifted, None] * n[lifted]
+        else:
+            x_before = x
+        found[t] = Impact(bounced, fast, vb, lifted, before, n, phi,
+                          lambda rows, s=shape, at=x_before: s.curvature(at[rows]))
     return x, v, found
 
 
 def impacts_vjp(physical, found, x_bar, v_bar, bar):
-    """The cotangents of (x, v) before the impact pass, given those after (in place)."""
-    planes = physical.planes
+    """The cotangents of (x, v) before the impact pass, given those after (in place). Lifted:
+    x - phi n, whose derivative is I - n n^T - phi dn/dx (grad phi = n). Bounced:
+    v - (1 + e) v_n n, whose normal's cotangent -(1 + e) ((g . n) v + v_n g) goes to x through
+    dn/dx."""
     for t in reversed(range(len(found))):
         impact = found[t]
         if impact is None:
             continue
-        n = planes.normal[t]
-        if len(impact.lifted):   # x - phi n = (I - n n^T) x + const: phi = n . (x - p) - offset
-            rows = impact.lifted
-            x_bar[rows] -= along(x_bar[rows], n)[:, None] * n
+        n_bar = np.zeros((len(impact.bounced), 3))
         rows = impact.bounced
-        if len(rows):   # v - (1 + e) v_n n
+        if len(rows):
+            n = impact.n[rows]
             gn = along(v_bar[rows], n)
             e = np.where(impact.fast, physical.restitution[t], 0.0)
             bar.restitution[t] -= float(np.sum(np.where(impact.fast, impact.v_n * gn, 0.0)))
+            n_bar = -(1.0 + e)[:, None] * (gn[:, None] * impact.v + impact.v_n[:, None]
+                                           * v_bar[rows])
             v_bar[rows] -= ((1.0 + e) * gn)[:, None] * n
+        lifted = impact.lifted
+        if len(lifted):
+            n = impact.n[lifted]
+            g = x_bar[lifted]
+            inward = g - along(g, n)[:, None] * n
+            curvature = impact.curvature(lifted)
+            if curvature is not None:
+                inward -= impact.phi[lifted, None] * np.einsum("kij,kj->ki", curvature, g)
+            x_bar[lifted] = inward
+        if len(rows):
+            add_curvature(rows, impact.curvature(rows), n_bar, x_bar)
     return x_bar, v_bar

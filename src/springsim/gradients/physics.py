@@ -202,7 +202,7 @@ def step_accelerations_vjp(physical: Physical, x, v, h, touches, g, x_bar, v_bar
     """Add g . d(step_accelerations)/d(everything) into x_bar, v_bar and bar; ``touches`` is
     what step_accelerations returned second for the same (x, v)."""
     if touches:
-        g = contact_accelerations_vjp(physical, h, touches, g, v_bar, bar)
+        g = contact_accelerations_vjp(physical, h, touches, g, x_bar, v_bar, bar)
     accelerations_vjp(physical, x, v, g, x_bar, v_bar, bar)
 
 

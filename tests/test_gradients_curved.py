@@ -1,0 +1,61 @@
+"""Gradients through contact with curved terrains (still spheres and bowls, gradients/contact.py
+and terrain_shapes.py) under the explicit methods, against central finite differences of the
+forward run: a cube landing on a sphere's shoulder and sliding off it, and one resting in a
+bowl, where the surface's curvature turns the normal under each particle."""
+import numpy as np
+import pytest
+
+from springsim.bodies.cube import Cube
+from springsim.scene import Scene
+from springsim.terrains import Bowl, Sphere
+from test_gradients import STEPS, assert_gradients_match
+
+KEYS = ["bodies.0.structural.ks", "terrains.0.friction", "terrains.0.restitution",
+        "bodies.0.velocity", "gravity"]
+EXPLICIT = ["symplectic_euler", "rk4"]
+
+
+def on_sphere():
+    """A 3 x 3 x 3 cube dropped at 1.5 m/s onto a sphere of radius 2, a little off its top, so
+    that it bounces (restitution 0.5) and slides (friction 0.05) down the shoulder."""
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.3, 2.51, 0.1),
+                velocity=(0.3, -1.5, 0.0))
+    return Scene(bodies=[cube], drag=0.1,
+                 terrains=[Sphere(center=(0.0, 0.0, 0.0), radius=2.0, friction=0.05,
+                                  restitution=0.5)])
+
+
+def in_bowl():
+    """A cube settling off-centre into a bowl of radius 4: its outer bottom edge lands on the
+    rising wall, at a different slope under each particle, and is held by static friction
+    (0.6)."""
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.6, -3.3, 0.0),
+                velocity=(0.0, -1.0, 0.0))
+    return Scene(bodies=[cube], drag=0.1,
+                 terrains=[Bowl(center=(0.0, 0.0, 0.0), radius=4.0, friction=0.6,
+                                restitution=0.5)])
+
+
+SCENES = {"sphere": on_sphere, "bowl": in_bowl}
+
+
+def touches(scene, integrator):
+    """How many particle-steps the run spends in the terrain's contact band (the test is
+    empty without contact)."""
+    import springsim
+
+    simulation = springsim.Simulation(scene, integrator=integrator, dt=STEPS[integrator])
+    count = 0
+    for _ in range(10):
+        simulation.step(1)
+        phi = scene.terrains[0].signed_distance(simulation.positions,
+                                                simulation.model.arrays.terrain_offset)
+        count += int(np.sum(phi < simulation.model.arrays.terrain_epsilon[0]))
+    return count
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+@pytest.mark.parametrize("integrator", EXPLICIT)
+def test_curved_contact_matches_finite_differences(integrator, case):
+    assert touches(SCENES[case](), integrator) > 0
+    assert_gradients_match(SCENES[case], integrator, KEYS)
