@@ -3,9 +3,9 @@
     .venv/bin/python benchmarks/resting_balls.py [--duration 8] [--drag 5]
 
 The built-in `cloth-balls` with scene drag 5 N s/m, run under implicit_euler at several steps
-and Newton iterations; printed for each: the fastest particle's speed at the end and how many
-particles move faster than 1 cm/s. A scene whose only source of energy is gravity, with drag,
-must come to rest.
+and Newton iterations; printed for each: the fastest particle's speed over the last second, the
+fastest at the end and how many particles move faster than 1 cm/s there. A scene whose only
+source of energy is gravity, with drag, must come to rest.
 """
 import argparse
 import json
@@ -23,9 +23,14 @@ def end_speeds(dt: float, newton_iterations: int, duration: float, drag: float) 
     scene.drag = drag
     scene.implicit.newton_iterations = newton_iterations
     simulation = springsim.Simulation(scene, integrator="implicit_euler", dt=dt)
-    simulation.advance(duration)
+    simulation.advance(duration - 1.0)
+    last_second = 0.0
+    for _ in range(int(round(1.0 / dt))):
+        simulation.step(1)
+        last_second = max(last_second, float(np.linalg.norm(simulation.velocities, axis=1).max()))
     speed = np.linalg.norm(simulation.velocities, axis=1)
-    return {"dt": dt, "newton_iterations": newton_iterations, "fastest_m_s": float(speed.max()),
+    return {"dt": dt, "newton_iterations": newton_iterations,
+            "fastest_last_second_m_s": last_second, "fastest_m_s": float(speed.max()),
             "moving_over_1cm_s": int((speed > 0.01).sum())}
 
 
@@ -38,8 +43,9 @@ def main() -> None:
         row = end_speeds(dt, newton, args.duration, args.drag)
         print(json.dumps(row))
         print(f"dt 1/{round(1 / dt)} s, {newton} Newton iteration(s): fastest "
-              f"{100 * row['fastest_m_s']:.2f} cm/s, {row['moving_over_1cm_s']} particles over "
-              f"1 cm/s after {args.duration:g} s")
+              f"{100 * row['fastest_last_second_m_s']:.2f} cm/s over the last second, "
+              f"{100 * row['fastest_m_s']:.2f} cm/s at the end, {row['moving_over_1cm_s']} "
+              f"particles over 1 cm/s after {args.duration:g} s")
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ BALL_POINT = 0       # a ball (node 0) and a point (node 1): c = (1, -1, 0, 0)
 BALL_TRIANGLE = 1    # a ball and a sheet triangle: c = (1, -w_0, -w_1, -w_2)
 POINT_TRIANGLE = 2   # a surface point and a surface triangle: c = (1, -w_0, -w_1, -w_2)
 EDGE_EDGE = 3        # two surface edges: c = (1 - s, s, -(1 - t), -t)
+BALL_SAMPLE = 4      # a ball and a sheet triangle's centre: c = (1, -1/3, -1/3, -1/3)
 
 
 class ImpulseContacts(NamedTuple):
@@ -46,5 +47,6 @@ class SolveContacts(NamedTuple):
     gap: np.ndarray          # (K,) m: g = n . sum_i c_i x_i - rest at the estimate (inf: never)
     coefficient: np.ndarray  # (K,) kg: h^2 k, the spring's stiffness times the step squared
     active: np.ndarray       # (K,) bool: in the active set (pushing)
-    shape: np.ndarray        # (K,) int64: BALL_POINT, BALL_TRIANGLE, POINT_TRIANGLE or EDGE_EDGE
+    shape: np.ndarray        # (K,) int64: BALL_POINT, BALL_TRIANGLE, BALL_SAMPLE,
+                             # POINT_TRIANGLE or EDGE_EDGE
     rest: np.ndarray         # (K,) m: the rest distance (radii, or the mean thickness)

@@ -3,6 +3,8 @@ estimate x + h (v + dv), the prediction x + h v in the first iteration):
     ball-point       c = (1, -1, 0, 0)            (a point is its own contact point)
     ball-triangle    c = (1, -w_0, -w_1, -w_2)    (w: barycentric weights of the triangle's point
     point-triangle   c = (1, -w_0, -w_1, -w_2)     closest to the ball's centre or the point)
+    ball-sample      c = (1, -1/3, -1/3, -1/3)    (the triangle's centre, fixed:
+                                                   contact_sets/solve.sampled_faces)
     edge-edge        c = (1 - s, s, -(1 - t), -t)  (s, t: the edges' closest points)
 The normal n is d / |d| there, or d at the start of the step (same weights) if the step has
 carried one side past the other (d . d_start <= 0); a surface point above a triangle's face
@@ -13,7 +15,7 @@ triangle's edge, touch through the neighbouring contacts and are left inactive.
 import math
 
 from ..._jit import inline_kernel, kernel
-from ..contact_sets import BALL_POINT, BALL_TRIANGLE, EDGE_EDGE, POINT_TRIANGLE
+from ..contact_sets import BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE, POINT_TRIANGLE
 from ..distance.closest_points import triangle_normal
 from .stencils import edge_edge_stencil, point_triangle_stencil
 
@@ -31,6 +33,8 @@ def stencil(shape, estimate, start, c, n):
     third of its depth)."""
     if shape == BALL_POINT:
         c[0], c[1], c[2], c[3] = 1.0, -1.0, 0.0, 0.0
+    elif shape == BALL_SAMPLE:
+        c[0], c[1], c[2], c[3] = 1.0, -1.0 / 3.0, -1.0 / 3.0, -1.0 / 3.0
     elif shape == EDGE_EDGE:
         s, t, _, _, _ = edge_edge_stencil(estimate[0], estimate[1], estimate[2], estimate[3])
         if not (0.0 < s < 1.0 and 0.0 < t < 1.0):
@@ -50,7 +54,7 @@ def stencil(shape, estimate, start, c, n):
         n[0], n[1], n[2] = d0 / length, d1 / length, d2 / length
         return True
     n[0], n[1], n[2] = 0.0, 1.0, 0.0   # concentric: choose up, as the post-step pass does
-    return shape == BALL_POINT or shape == BALL_TRIANGLE
+    return shape == BALL_POINT or shape == BALL_TRIANGLE or shape == BALL_SAMPLE
 
 
 @inline_kernel

@@ -39,7 +39,7 @@ import math
 import numpy as np
 
 from ..._jit import inline_kernel, kernel
-from ..contact_sets import BALL_POINT, BALL_TRIANGLE
+from ..contact_sets import BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE
 from ..narrow_phase.solve import stencil
 
 
@@ -184,7 +184,7 @@ def newton_iterations_needed(model, contacts, v, h, requested):
     most = 0.0
     needed = requested
     for k in range(nodes.shape[0]):
-        if shape[k] != BALL_POINT and shape[k] != BALL_TRIANGLE:
+        if shape[k] != BALL_POINT and shape[k] != BALL_TRIANGLE and shape[k] != BALL_SAMPLE:
             needed = max(needed, impact_solves(model, nodes, k, v, h, rest[k]))
             continue
         a = nodes[k, 0]
