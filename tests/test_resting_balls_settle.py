@@ -31,6 +31,6 @@ def test_the_balls_resting_on_the_cloth_settle(dt):
     balls = simulation.positions[model.arrays.balls]
     assert np.all(balls[:, 1] < -0.2)   # they rest on the cloth, sagging under them
     centres = np.linalg.norm(balls[:, None] - balls[None], axis=2)
-    radii = model.radius[model.arrays.balls]
+    radii = model.arrays.radius[model.arrays.balls]
     apart = centres - (radii[:, None] + radii[None])
     assert apart[~np.eye(len(balls), dtype=bool)].min() > -0.005   # not pressed into each other
