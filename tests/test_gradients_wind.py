@@ -58,7 +58,8 @@ def test_wind_terms_match_the_kernels():
     """The NumPy wind (the adjoint's) against the simulation's kernels, force and blocks, on a
     gusty cloth at an arbitrary time."""
     from springsim.gradients.physics import Physical
-    from springsim.gradients.wind import WIND_TIME, wind_blocks, wind_forces
+    from springsim.gradients.clock import FORCE_TIME
+    from springsim.gradients.wind import wind_blocks, wind_forces
     from springsim.implicit.pattern import diagonal_pattern
     from springsim.model import build_model
     from springsim.wind import add_wind_forces, add_wind_with_jacobian
@@ -70,7 +71,7 @@ def test_wind_terms_match_the_kernels():
     t, h = 0.37, 0.01
     model.arrays.clock[2] = t
     physical = Physical.of(model)
-    physical.clock[WIND_TIME] = t
+    physical.clock[FORCE_TIME] = t
     force = np.zeros_like(x)
     add_wind_forces(model.arrays, x, v, np.ones(1), force)
     np.testing.assert_allclose(wind_forces(physical, x, v), force, rtol=1e-12, atol=1e-14)

@@ -6,8 +6,8 @@ name (``@register_adjoint``). Each mirrors its method's step (integrators/) line
 reverse, so the gradient is of the arithmetic the simulation did, not of the differential
 equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)`` takes the
 recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
-start, the step's start time in ``physical.clock`` (tape.backward sets it); each force
-evaluation sets the wind's time there first, as the forward's stages move the world. The
+start, the step's start time in ``physical.clock`` (clock.py); each force evaluation sets its
+own time there first, as the forward's stages move the world. The
 explicit methods' terrain contact (still planes, spheres and bowls: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
 in NumPy from the step's start to know what it did.
@@ -19,7 +19,9 @@ from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
-from .wind import STEP_START, WIND_TIME, blows
+from .clock import at_time
+from .pins import aim, place, release, soft
+from .wind import blows
 
 ADJOINTS: dict[str, type] = {}
 
@@ -27,11 +29,6 @@ ADJOINTS: dict[str, type] = {}
 def register_adjoint(cls):
     ADJOINTS[cls.name] = cls
     return cls
-
-
-def at_time(physical, offset):
-    """Set the wind's time to the step's start plus ``offset`` (s)."""
-    physical.clock[WIND_TIME] = physical.clock[STEP_START] + offset
 
 
 class Adjoint:
@@ -50,12 +47,17 @@ class ExplicitAdjoint(Adjoint):
     did), then the impact pass; the adjoint goes back through both."""
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start
+        at_time(physical, 0.0)
+        x, v = place(physical, *start)
         x_new, v_new, stages = self.update(physical, h, x, v)
+        x_bar, v_bar = x_bar.copy(), v_bar.copy()
         if len(physical.friction):
             _, _, found = impacts(physical, x_new, v_new)
-            x_bar, v_bar = impacts_vjp(physical, found, x_bar.copy(), v_bar.copy(), bar)
-        return self.update_vjp(physical, h, x, v, stages, x_bar, v_bar, bar)
+            x_bar, v_bar = impacts_vjp(physical, found, x_bar, v_bar, bar)
+        release(physical, x_bar, v_bar)   # the pins on paths were put on them after the update
+        x_bar, v_bar = self.update_vjp(physical, h, x, v, stages, x_bar, v_bar, bar)
+        release(physical, x_bar, v_bar)   # and before it
+        return x_bar, v_bar
 
 
 @register_adjoint
@@ -110,9 +112,11 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        if blows(physical) or not far_from_terrains(physical, h, start, end):
+        if blows(physical) or soft(physical).any() or not far_from_terrains(physical, h, start,
+                                                                             end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
-        x, v = start[0], start[1]
+        at_time(physical, 0.0)
+        x, v = place(physical, start[0], start[1])
         if self.work is None or self.work.shape[1] != len(x):
             self.work = np.empty((17, len(x), 3))
             self.columns = np.empty((ROWS, len(x)))
@@ -125,10 +129,12 @@ class RK4Adjoint(ExplicitAdjoint):
                           physical.kd[loose], physical.rest[loose]))
         _, layout, table, loose = self.runs
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
+        release(physical, x_bar, v_bar)
         rk4_step_vjp(layout, table, loose, (physical.inv_mass, physical.drag, physical.gravity),
                      h, x, v, x_bar, v_bar,
                      (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), self.work,
                      self.columns)
+        release(physical, x_bar, v_bar)
         return x_bar, v_bar
 
     def update(self, physical, h, x, v):
@@ -188,20 +194,33 @@ class ImplicitEulerAdjoint(Adjoint):
     solver = None        # solve.ForwardSolver, made on first use
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        x, v = start[0], start[1]
         iterations = self.integrator.newton_iterations
-        at_time(physical, h)   # the air at the step's end, as the forward's
+        at_time(physical, 0.0)
+        x, v = place(physical, start[0], start[1])
+        at_time(physical, h)   # the air and the paths at the step's end, as the forward's
+        x_bar, v_bar = x_bar.copy(), v_bar.copy()
+        release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
+        v = aim(physical, x, v, h)
         if len(start) == 3 and touches_planes(physical, h, start, end):
             kind, terrain, dampers = start[2]
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
             _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
             x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,
                                                              v_bar, carried, bar)
-            return x_bar, v_bar
-        self.carried_bar = None   # a step without contacts leaves no damper behind
+        else:
+            self.carried_bar = None   # a step without contacts leaves no damper behind
+            x_bar, v_bar = self.newton_vjp(physical, h, x, v, end, x_bar, v_bar, bar)
+        release(physical, x_bar, v_bar)   # placed at the step's start, then aimed
+        return x_bar, v_bar
+
+    def newton_vjp(self, physical, h, x, v, end, x_bar, v_bar, bar):
+        """The Newton iterations backwards (class doc), from the step's end to (x, v)."""
         if self.solver is None:
             self.solver = ForwardSolver(self.model, self.integrator)
-        estimates = newton_estimates(physical, h, x, v, end[1] - v, iterations, self.solver)
+        iterations = self.integrator.newton_iterations
+        # the solve holds every pinned particle's velocity: dv is zero there
+        dv_end = np.where(physical.free[:, None], end[1] - v, 0.0)
+        estimates = newton_estimates(physical, h, x, v, dv_end, iterations, self.solver)
         dv_bar = v_bar + h * x_bar
         x_bar, v_bar = x_bar.copy(), dv_bar.copy()
         for k in reversed(range(iterations)):

@@ -2,13 +2,13 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag, the wind on surfaces (wind.py) and pins that hold still; contact with
-still planes (contact.py, implicit_contact.py), and with still spheres and bowls under the
-explicit methods (contact.py). Not yet covered, so refused rather than given a gradient that
-leaves a force out: soft pins and pins that move, contact with meshes, with moving or deforming
+dampers, gravity, drag, the wind on surfaces (wind.py) and pins that hold, move or are soft
+(pins.py); contact with still planes (contact.py, implicit_contact.py), and with still spheres
+and bowls under the explicit methods (contact.py). Not yet covered, so refused rather than given
+a gradient that leaves a force out: attachments, contact with meshes, with moving or deforming
 terrains and with curved ones under implicit_euler, body-body and ball contact (and with them
-the wind on balls). A terrain the adjoint does not follow may be in the scene
-as long as no particle comes within its contact band during the run.
+the wind on balls). A terrain the adjoint does not follow may be in the scene as long as no
+particle comes within its contact band during the run.
 """
 import numpy as np
 
@@ -32,25 +32,11 @@ def check_supported(simulation) -> None:
         if self_colliding:
             raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
                              "self contact yet: set it to false")
-    check_world_still(simulation.model)
     surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
         arrays.surface_points) else []
     if len(surfaces) > 1:
         raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
                          "other, and gradients do not follow body-body contact yet")
-
-
-def check_world_still(model) -> None:
-    """Refuses the moving world's forces that the adjoint leaves out (module docstring)."""
-    arrays = model.arrays
-    soft = np.flatnonzero(arrays.pin_stiffness > 0)
-    if len(soft):
-        raise SceneError("bodies.pins.stiffness", float(arrays.pin_stiffness[soft[0]]),
-                         "makes a soft pin, which gradients do not follow yet: leave it out "
-                         "for a hard pin")
-    if len(arrays.pin_particles):   # the pins that move (world.py); held ones are model.pinned
-        raise SceneError("bodies.pins", "motion, follow or animation", "moves a pin, which "
-                         "gradients do not follow yet: hold the pins still")
 
 
 def contact_check(simulation):

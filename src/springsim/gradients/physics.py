@@ -22,7 +22,8 @@ import numpy as np
 
 from . import kernels
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
-from .wind import wind_blocks_vjp, wind_forces, wind_forces_vjp, outer_weights
+from .pins import pin_forces, pin_forces_vjp
+from .wind import wind_forces, wind_forces_vjp
 
 
 class Physical(NamedTuple):
@@ -45,7 +46,14 @@ class Physical(NamedTuple):
     wind_modes: np.ndarray      # (M, 8) the gust modes: direction, wave vector, frequency, phase
     wind_triangles: np.ndarray  # (T, 3) the triangles the wind pushes
     wind_weights: np.ndarray    # (T,) their weights (wind.quads_both_ways)
-    clock: np.ndarray           # (2,) s: the step's start and the wind's time (wind.py here)
+    clock: np.ndarray           # (2,) s: the step's start and the force evaluation's (clock.py)
+    pin_particles: np.ndarray   # (Q,) the particles of pins on paths and of soft pins (pins.py)
+    pin_motion: np.ndarray      # (Q,) each one's path: a row of the motion tables
+    pin_placed: np.ndarray      # (Q, 3) m, where its path starts it
+    pin_stiffness: np.ndarray   # (Q,) N/m, 0 for a hard pin
+    pin_damping: np.ndarray     # (Q,) N s/m
+    motion_info: np.ndarray     # the motions (motion.pack_motions)
+    motion_keys: np.ndarray
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -61,7 +69,10 @@ class Physical(NamedTuple):
                    arrays.wind_settings.astype(float), arrays.wind_keys.astype(float),
                    arrays.wind_modes.astype(float),
                    arrays.wind_triangles.astype(np.int64).reshape(-1, 3),
-                   arrays.wind_weights.astype(float), np.zeros(2))
+                   arrays.wind_weights.astype(float), np.zeros(2),
+                   arrays.pin_particles.astype(np.int64), arrays.pin_motion.astype(np.int64),
+                   arrays.pin_placed.astype(float), arrays.pin_stiffness.astype(float),
+                   arrays.pin_damping.astype(float), arrays.motion_info, arrays.motion_keys)
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -89,6 +100,8 @@ class Cotangents:
     wind_settings: np.ndarray
     wind_keys: np.ndarray
     wind_modes: np.ndarray
+    pin_stiffness: np.ndarray
+    pin_damping: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
@@ -172,14 +185,15 @@ def accelerations(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarra
     force = spring_forces(physical, x, v)
     return (w[:, None] * (force - physical.drag[:, None] * v)
             + np.where(physical.free[:, None], physical.gravity, 0.0)
-            + w[:, None] * wind_forces(physical, x, v))
+            + w[:, None] * (wind_forces(physical, x, v) + pin_forces(physical, x, v)))
 
 
 def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
     """Add g . d(accelerations)/d(everything) into x_bar, v_bar and bar."""
     w = physical.inv_mass
     force = spring_forces(physical, x, v)
-    net = force - physical.drag[:, None] * v + wind_forces(physical, x, v)
+    net = (force - physical.drag[:, None] * v + wind_forces(physical, x, v)
+           + pin_forces(physical, x, v))
     free = physical.free
     bar.gravity += g[free].sum(axis=0)
     bar.mass -= np.where(free, w * w * dot(g, net), 0.0)
@@ -187,6 +201,7 @@ def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents
     v_bar -= (w * physical.drag)[:, None] * g
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
     wind_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+    pin_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
 
 
 def step_accelerations(physical: Physical, x, v, h):

@@ -22,6 +22,8 @@ from .physics import (
     stiffness_product_vjp,
     system_product_vjp,
 )
+from .pins import (first_iteration_rhs, first_iteration_rhs_vjp, pin_blocks, pin_blocks_vjp,
+                   pin_forces, pin_forces_vjp)
 from .wind import blows, outer_weights, wind_blocks, wind_blocks_vjp, wind_forces, wind_forces_vjp
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
@@ -61,8 +63,10 @@ class ForwardSolver:
 
         assemble_diagonal_and_terms(self.arrays, self.layout.diagonal, x, 1.0, h, h * h,
                                     self.blocks, self.terms)
+        slots = self.layout.diagonal.diagonal_slot
+        self.blocks[slots] += pin_blocks(physical, len(x), h)
         if blows(physical):
-            self.blocks[self.layout.diagonal.diagonal_slot] += wind_blocks(physical, x, v, h)
+            self.blocks[slots] += wind_blocks(physical, x, v, h)
 
     def solve(self, rhs):
         """u with A u = rhs on the free particles (zero on the pinned ones)."""
@@ -80,7 +84,7 @@ class ForwardSolver:
 
 def system_matrix(physical, x, v, h):
     """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag, the
-    wind's blocks, and every spring's block C = p l l^T + q I added to (a, a), (b, b) and
+    wind's and soft pins' blocks, and every spring's block C = p l l^T + q I added to (a, a), (b, b) and
     subtracted from (a, b), (b, a)."""
     count = x.shape[0]
     springs = geometry(physical, x)
@@ -100,11 +104,10 @@ def system_matrix(physical, x, v, h):
     rows.append(np.arange(3 * count))
     cols.append(np.arange(3 * count))
     values.append(diagonal)
-    if blows(physical):
-        particle = 3 * np.arange(count)[:, None, None]
-        rows.append((particle + np.arange(3)[None, :, None]).repeat(3, axis=2))
-        cols.append((particle + np.arange(3)[None, None, :]).repeat(3, axis=1))
-        values.append(wind_blocks(physical, x, v, h))
+    particle = 3 * np.arange(count)[:, None, None]
+    rows.append((particle + np.arange(3)[None, :, None]).repeat(3, axis=2))
+    cols.append((particle + np.arange(3)[None, None, :]).repeat(3, axis=1))
+    values.append(wind_blocks(physical, x, v, h) + pin_blocks(physical, count, h))
     matrix = sparse.coo_matrix((np.concatenate([v.ravel() for v in values]),
                                 (np.concatenate([r.ravel() for r in rows]),
                                  np.concatenate([c.ravel() for c in cols]))),
@@ -139,8 +142,10 @@ def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, v
     bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
     vk_bar -= h * physical.drag[:, None] * lam
     wind_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
+    pin_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     if first:
         stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
+        first_iteration_rhs_vjp(physical, v, h, lam, v_bar, bar)
 
 
 def estimate(x, v, dv, h, first):
@@ -153,13 +158,14 @@ def estimate(x, v, dv, h, first):
 
 def newton_rhs(physical, h, x, v, dv, first):
     """r_k = h (F(x_k, v_k) + m g - c v_k) - M dv_k (+ h^2 dF/dx(x) v in the first); F with
-    the wind's force."""
+    the wind's and the soft pins' forces."""
     x_k, v_k = estimate(x, v, dv, h, first)
     external = (np.where(physical.free[:, None], physical.mass[:, None] * physical.gravity, 0.0)
-                - physical.drag[:, None] * v_k + wind_forces(physical, x_k, v_k))
+                - physical.drag[:, None] * v_k + wind_forces(physical, x_k, v_k)
+                + pin_forces(physical, x_k, v_k))
     rhs = h * (spring_forces(physical, x_k, v_k) + external) - physical.solve_mass[:, None] * dv
     if first:
-        rhs += h * h * stiffness_product(physical, x, v)
+        rhs += h * h * stiffness_product(physical, x, v) + first_iteration_rhs(physical, v, h)
     return rhs
 
 
@@ -191,7 +197,9 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
-    wind_blocks_vjp(physical, x_k, v_k, h, outer_weights(-lam, ddv), xk_bar, vk_bar, bar)
+    weights = outer_weights(-lam, ddv)
+    wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
+    pin_blocks_vjp(physical, h, weights, bar)
     x_bar += xk_bar
     v_bar += vk_bar
     if not first:   # x_k = x + h (v + dv), v_k = v + dv

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .physics import Cotangents
-from .wind import STEP_START
+from .clock import STEP_START
 
 DEFAULT_MEMORY_LIMIT = 1 << 30   # bytes of stored states (the bar: a 10 s run < 2 GB)
 

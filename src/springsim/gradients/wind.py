@@ -11,8 +11,7 @@ corners' velocities; the gusts, sums of sines of the positions and the gust mode
 (mean wind, gust amplitude, 1/2 rho C_d, 1/2 rho C_f) as a function of the wind's keys and
 settings, by complex steps again.
 
-The wind's time is ``physical.clock[WIND_TIME]``, which the adjoints set for every force
-evaluation as the forward's move_world sets the model's clock. Balls feel the wind too, but the
+The wind's time is the force evaluation's (clock.py). Balls feel the wind too, but the
 adjoint refuses balls (checks.py), so only triangles are here.
 """
 from typing import NamedTuple
@@ -20,9 +19,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..wind import DENSITY, DRAG, FRICTION, ON, STRENGTH
+from .clock import FORCE_TIME
 
 STEP = 1e-30        # the complex step: far below rounding, so f(z + i STEP) has no error in f
-STEP_START, WIND_TIME = 0, 1   # physical.clock: the step's start time and the wind's time (s)
 TWO_NINTHS = 2.0 / 9.0
 
 
@@ -230,7 +229,7 @@ def wind_forces(physical, x, v):
     out = np.zeros_like(x)
     if not blows(physical):
         return out
-    at = triangles_at(physical, x, v, physical.clock[WIND_TIME])
+    at = triangles_at(physical, x, v, physical.clock[FORCE_TIME])
     force = triangle_force(at.found, at.air.value[4:6])
     share = (physical.wind_weights / 3.0)[:, None] * force
     for j in range(3):
@@ -242,7 +241,7 @@ def wind_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
     """Add g . d(wind_forces)/d(x, v, the wind's parameters) (g (P, 3))."""
     if not blows(physical):
         return
-    t = physical.clock[WIND_TIME]
+    t = physical.clock[FORCE_TIME]
     at = triangles_at(physical, x, v, t)
     triangles = physical.wind_triangles
     g_k = (physical.wind_weights / 3.0)[:, None] * (g[triangles[:, 0]] + g[triangles[:, 1]]
@@ -266,7 +265,7 @@ def wind_blocks(physical, x, v, h):
     out = np.zeros((len(x), 3, 3))
     if not blows(physical):
         return out
-    at = triangles_at(physical, x, v, physical.clock[WIND_TIME])
+    at = triangles_at(physical, x, v, physical.clock[FORCE_TIME])
     found = at.found
     normal, along = at.air.value[4:6]
     n = found.normal
@@ -284,7 +283,7 @@ def wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
     (P, 3, 3), the cotangent of each particle's block)."""
     if not blows(physical) or not weights.any():
         return
-    t = physical.clock[WIND_TIME]
+    t = physical.clock[FORCE_TIME]
     at = triangles_at(physical, x, v, t)
     triangles = physical.wind_triangles
     q = (h * physical.wind_weights)[:, None, None] * (
