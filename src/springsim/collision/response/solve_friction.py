@@ -19,8 +19,7 @@ has none, as in the post-step pass.
 import numpy as np
 
 from ..._jit import kernel
-from ..contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE, PARAMS, PASSES,
-                            POINT_TRIANGLE, ImpulseContacts)
+from ..contact_sets import BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, PARAMS, PASSES, ImpulseContacts
 from ..contact_sets.after_step import surface_contact_keys, surface_params
 from .impulses import apply_friction
 
