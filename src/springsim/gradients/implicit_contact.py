@@ -175,7 +175,8 @@ class Replay(NamedTuple):
 
 def diagonal_blocks(physical, x_k, v_k, h):
     """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag,
-    the wind's and soft pins' blocks and every spring's C = p l l^T + q I (physics.system_product)."""
+    the wind's and soft pins' blocks and every spring's C = p l l^T + q I
+    (physics.system_product)."""
     springs = geometry(physical, x_k)
     along_, across, _, _, _ = stiffness_coefficients(physical, springs)
     real = springs.length > 0.0

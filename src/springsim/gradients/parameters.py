@@ -8,8 +8,9 @@ Two kinds, an open set (``parameter`` tries each kind in PARAMETER_KINDS):
   ``bodies.0.velocity``, ``bodies.0.edge_length``. How the model depends on it is found by
   building the model at value +- delta (model.build_model): the springs' ks, kd and rest
   lengths, the masses, drag, gravity, the wind's settings and keys, the soft pins' stiffness
-  and damping and the initial state are linear in every such key, so the difference is exact to rounding (``wind.gusts.length``
-  enters the gust modes as its inverse: exact to delta^2, about 1e-8 of the value). A key that
+  and damping and the initial state are linear in every such key, so the difference is exact
+  to rounding (``wind.gusts.length`` enters the gust modes as its inverse: exact to delta^2,
+  about 1e-8 of the value). A key that
   changes anything else of the model (a terrain, the lattice) is refused as not
   differentiable.
 - ``ModelArray``: one of the model's own arrays, set on the built model: ``initial_positions``,

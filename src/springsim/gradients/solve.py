@@ -84,8 +84,8 @@ class ForwardSolver:
 
 def system_matrix(physical, x, v, h):
     """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag, the
-    wind's and soft pins' blocks, and every spring's block C = p l l^T + q I added to (a, a), (b, b) and
-    subtracted from (a, b), (b, a)."""
+    wind's and soft pins' blocks, and every spring's block C = p l l^T + q I added to (a, a),
+    (b, b) and subtracted from (a, b), (b, a)."""
     count = x.shape[0]
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)

@@ -164,7 +164,8 @@ def block_contraction(found: Terms, coefficients, q):
     n = found.normal
     nqn = np.einsum("ki,kij,kj->k", n, q, n)
     trace = np.einsum("kii->k", q)
-    return TWO_NINTHS * (normal * found.normal_size * nqn + along * found.along_size * (trace - nqn))
+    return TWO_NINTHS * (normal * found.normal_size * nqn
+                         + along * found.along_size * (trace - nqn))
 
 
 def complex_gradient(function, corners, w):
