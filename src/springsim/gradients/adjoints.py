@@ -8,7 +8,7 @@ equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)
 recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
 start, the step's start time in ``physical.clock`` (clock.py); each force evaluation sets its
 own time there first, as the forward's stages move the world. The explicit methods' terrain
-contact (still planes, spheres and bowls: contact.py) is in their force evaluations
+contact (still planes, spheres, bowls and meshes: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
 in NumPy from the step's start to know what it did.
 """

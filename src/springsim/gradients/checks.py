@@ -51,8 +51,9 @@ def contact_check(simulation):
     implicit = simulation.integrator.name == "implicit_euler"
     followed = [shape is not None and (isinstance(terrain, Plane) or not implicit)
                 for terrain, shape in zip(model.terrains, shapes)]
-    covered = ("still planes only under implicit_euler (still spheres and bowls too under "
-               "the explicit methods)" if implicit else "still planes, spheres and bowls only")
+    covered = ("still planes only under implicit_euler (still spheres, bowls and meshes too "
+               "under the explicit methods)" if implicit
+               else "still planes, spheres, bowls and meshes only")
     if all(followed):
         return None
     radii = model.arrays.terrain_offset

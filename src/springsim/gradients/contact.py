@@ -17,10 +17,11 @@ restitution); the gradient is that branch's derivative. Where a particle changes
 touches down, leaves, starts or stops sliding, bounces) the motion has a kink or a jump and the
 gradient is the one-sided derivative of the branch the run took: finite, never NaN.
 
-Still planes, spheres and bowls (terrain_shapes.py): a plane's normal is the same everywhere, so
-the contact depends on positions only through which branch a particle takes; a sphere's turns
-with the position, and its derivative (the curvature) carries the normal's cotangent to the
-positions. Other terrains touched during a run are refused (gradients/checks.py).
+Still planes, spheres, bowls and meshes (terrain_shapes.py): a plane's normal is the same
+everywhere, so the contact depends on positions only through which branch a particle takes; a
+sphere's or a mesh's turns with the position, and its derivative (the curvature) carries the
+normal's cotangent to the positions. Moving and deforming terrains touched during a run are
+refused (gradients/checks.py).
 Backward Euler's contact (implicit_contact.py) follows planes only.
 """
 from typing import NamedTuple
@@ -114,7 +115,7 @@ class Touch(NamedTuple):
     v: np.ndarray        # (K, 3) their velocities
     case: np.ndarray     # (K,) STICK, KINETIC or SLOWING (coulomb_friction's branches)
     n: np.ndarray        # (K, 3) the terrain's normal at each
-    curvature: np.ndarray | None   # (K, 3, 3) dn/dx there, None for a plane
+    curvature: np.ndarray | None   # (K, 3, 3) (dn/dx)^T there, None for a plane
 
 
 def contact_accelerations(physical, x, v, h, a):
@@ -185,7 +186,7 @@ def normal_vjp(touch, friction, h, g):
 
 
 def add_curvature(rows, curvature, n_bar, x_bar):
-    """x_bar[rows] += (dn/dx)^T n_bar (the curvature is symmetric); nothing for a plane."""
+    """x_bar[rows] += (dn/dx)^T n_bar (``curvature`` is the transpose); nothing for a plane."""
     if curvature is not None:
         np.add.at(x_bar, rows, np.einsum("kij,kj->ki", curvature, n_bar))
 
@@ -259,7 +260,8 @@ def touched_vjp(touch, n, friction, h, g):
 class Impact(NamedTuple):
     """What one terrain's impact pass did: particles whose normal velocity it took away
     (``bounced``, with the restitution used, e or 0) and those it moved out (``lifted``), with
-    the normal, its curvature (None for a plane) and what they were."""
+    the normal, the distance's gradient, the curvature (None for a plane) and what they
+    were."""
 
     bounced: np.ndarray
     fast: np.ndarray      # (len(bounced),) bool: reflected with the terrain's restitution
@@ -269,6 +271,7 @@ class Impact(NamedTuple):
     n: np.ndarray         # (P, 3) the terrain's normal at every particle, before lifting
     phi: np.ndarray       # (P,) and the distance
     curvature: object     # shape.curvature, called for the rows that need it
+    gradient: object      # shape.gradient (grad phi), likewise
 
 
 def impacts(physical, x, v):
@@ -297,13 +300,14 @@ def impacts(physical, x, v):
         else:
             x_before = x
         found[t] = Impact(bounced, fast, vb, lifted, before, n, phi,
-                          lambda rows, s=shape, at=x_before: s.curvature(at[rows]))
+                          lambda rows, s=shape, at=x_before: s.curvature(at[rows]),
+                          lambda rows, s=shape, at=x_before: s.gradient(at[rows]))
     return x, v, found
 
 
 def impacts_vjp(physical, found, x_bar, v_bar, bar):
     """The cotangents of (x, v) before the impact pass, given those after (in place). Lifted:
-    x - phi n, whose derivative is I - n n^T - phi dn/dx (grad phi = n). Bounced:
+    x - phi n, whose derivative is I - n (grad phi)^T - phi dn/dx. Bounced:
     v - (1 + e) v_n n, whose normal's cotangent -(1 + e) ((g . n) v + v_n g) goes to x through
     dn/dx."""
     for t in reversed(range(len(found))):
@@ -324,7 +328,7 @@ def impacts_vjp(physical, found, x_bar, v_bar, bar):
         if len(lifted):
             n = impact.n[lifted]
             g = x_bar[lifted]
-            inward = g - along(g, n)[:, None] * n
+            inward = g - along(g, n)[:, None] * impact.gradient(lifted)
             curvature = impact.curvature(lifted)
             if curvature is not None:
                 inward -= impact.phi[lifted, None] * np.einsum("kij,kj->ki", curvature, g)

@@ -1,17 +1,22 @@
 """The still terrains the explicit methods' contact adjoint follows (contact.py), each as its
-distance, its normal and the normal's derivative in the position (the curvature, which the
-gradient of a contact on a curved surface needs: where a particle touches decides which way the
-surface pushes it).
+distance, its normal, the distance's gradient and the normal's derivative in the position (the
+curvature, which the gradient of a contact on a curved surface needs: where a particle touches
+decides which way the surface pushes it).
 
 An open set: a terrain kind joins by a function from the terrain to its shape in SHAPES. A
-terrain without one (a mesh, whose normal comes from an interpolated distance grid) is not
-followed, and touching it is refused (checks.py).
+terrain without one (one that moves or deforms) is not followed, and touching it is refused
+(checks.py).
+
+``curvature`` gives (dn/dx)^T, the transpose that vector-Jacobian products take; for a plane, a
+sphere and a bowl dn/dx is symmetric. ``gradient`` gives grad phi, which is the normal for an
+exact distance; a mesh's trilinear distance grid has a normal of its gradient's direction, and
+a gradient whose length is only near 1.
 """
 from typing import NamedTuple
 
 import numpy as np
 
-from ..terrains import Bowl, Plane, Sphere
+from ..terrains import Bowl, MeshTerrain, Plane, Sphere
 
 
 class Flat(NamedTuple):
@@ -28,8 +33,11 @@ class Flat(NamedTuple):
     def normals(self, x):
         return np.broadcast_to(self.normal, x.shape)
 
+    def gradient(self, x):
+        return self.normals(x)
+
     def curvature(self, x):
-        """dn/dx per particle (K, 3, 3), symmetric; None where it is zero everywhere."""
+        """(dn/dx)^T per particle (K, 3, 3); None where it is zero everywhere."""
         return None
 
 
@@ -52,6 +60,9 @@ class Round(NamedTuple):
                         np.array([0.0, 1.0, 0.0]))
         return self.side * unit
 
+    def gradient(self, x):
+        return self.normals(x)
+
     def curvature(self, x):
         d = x - self.center
         length = np.linalg.norm(d, axis=1)
@@ -59,6 +70,83 @@ class Round(NamedTuple):
         unit = d / safe[:, None]
         projector = np.eye(3) - unit[:, :, None] * unit[:, None, :]
         return (self.side * np.where(length > 0.0, 1.0 / safe, 0.0))[:, None, None] * projector
+
+
+class Gridded(NamedTuple):
+    """A still mesh's signed distance grid (terrains/mesh.py), trilinear in each cell as
+    ``mesh_distance`` interpolates it, in the kernel's arithmetic: phi, the normal (the
+    gradient's direction), the gradient, and the normal's derivative from the trilinear
+    function's mixed second derivatives (it has no pure ones). Beyond the grid (free space,
+    never touched) the normal points away from it and the curvature is zero."""
+
+    origin: np.ndarray
+    inverse: float          # 1 / the cell size
+    values: np.ndarray      # (n0, n1, n2)
+
+    def cells(self, x):
+        """(the trilinear pieces, the offset beyond the grid in cells (K, 3))."""
+        n = np.array(self.values.shape)
+        u = (x - self.origin) * self.inverse
+        clamped = np.minimum(np.maximum(u, 0.0), n - 1.0)
+        index = np.minimum(clamped.astype(np.int64), n - 2)
+        f = clamped - index
+        i, j, k = index.T
+        c = {(a, b, d): self.values[i + a, j + b, k + d]
+             for a in (0, 1) for b in (0, 1) for d in (0, 1)}
+        return trilinear(c, f[:, 0], f[:, 1], f[:, 2]), u - clamped
+
+    def distance(self, x, offset):
+        (phi, _, _), beyond = self.cells(x)
+        outside = np.linalg.norm(beyond, axis=1)
+        return np.where(outside > 0.0, outside / self.inverse + np.maximum(phi, 0.0), phi) \
+            - offset
+
+    def gradient(self, x):
+        (_, g, _), beyond = self.cells(x)
+        return np.where(np.any(beyond != 0.0, axis=1)[:, None], self.normals(x),
+                        g * self.inverse)
+
+    def normals(self, x):
+        (_, g, _), beyond = self.cells(x)
+        size = np.linalg.norm(g, axis=1)
+        n = np.where(size[:, None] > 0.0, g / np.where(size > 0.0, size, 1.0)[:, None],
+                     np.array([0.0, 1.0, 0.0]))
+        outside = np.linalg.norm(beyond, axis=1)
+        away = beyond / np.where(outside > 0.0, outside, 1.0)[:, None]
+        return np.where(outside[:, None] > 0.0, away, n)
+
+    def curvature(self, x):
+        """(dn/dx)^T = H (I - n n^T) / (|g| cell), H the cell's mixed second derivatives."""
+        (_, g, hessian), beyond = self.cells(x)
+        size = np.linalg.norm(g, axis=1)
+        n = g / np.where(size > 0.0, size, 1.0)[:, None]
+        projector = np.eye(3) - n[:, :, None] * n[:, None, :]
+        scale = np.where((size > 0.0) & ~np.any(beyond != 0.0, axis=1),
+                         self.inverse / np.where(size > 0.0, size, 1.0), 0.0)
+        return scale[:, None, None] * np.einsum("kij,kjl->kil", hessian, projector)
+
+
+def trilinear(c, fu, fv, fw):
+    """(phi, its gradient in cells (K, 3), its second derivatives (K, 3, 3)) of the trilinear
+    function with corner values c[(a, b, d)] at the fractions (fu, fv, fw), in
+    terrains/mesh.mesh_distance's order of operations."""
+    c000, c001, c010, c011 = c[0, 0, 0], c[0, 0, 1], c[0, 1, 0], c[0, 1, 1]
+    c100, c101, c110, c111 = c[1, 0, 0], c[1, 0, 1], c[1, 1, 0], c[1, 1, 1]
+    c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
+    c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
+    c0, c1 = c00 + fv * (c10 - c00), c01 + fv * (c11 - c01)
+    phi = c0 + fw * (c1 - c0)
+    gw = c1 - c0
+    gv = (c10 - c00) + fw * ((c11 - c01) - (c10 - c00))
+    gu_0 = (c100 - c000) + fv * ((c110 - c010) - (c100 - c000))
+    gu_1 = (c101 - c001) + fv * ((c111 - c011) - (c101 - c001))
+    gu = gu_0 + fw * (gu_1 - gu_0)
+    uv_0, uv_1 = (c110 - c010) - (c100 - c000), (c111 - c011) - (c101 - c001)
+    uv, uw, vw = uv_0 + fw * (uv_1 - uv_0), gu_1 - gu_0, (c11 - c01) - (c10 - c00)
+    zero = np.zeros_like(phi)
+    hessian = np.stack([np.stack([zero, uv, uw], -1), np.stack([uv, zero, vw], -1),
+                        np.stack([uw, vw, zero], -1)], -2)
+    return phi, np.stack([gu, gv, gw], -1), hessian
 
 
 def flat(terrain, row):
@@ -73,7 +161,12 @@ def bowl(terrain, row):
     return Round(row[0:3].copy(), float(row[3]), -1.0)
 
 
-SHAPES = {Plane: flat, Sphere: sphere, Bowl: bowl}
+def gridded(terrain, row):
+    """row: terrains/mesh.DistanceGrid.row, whose values the terrain's cached grid holds."""
+    return Gridded(row[0:3].copy(), float(row[8]), terrain.grid().values)
+
+
+SHAPES = {Plane: flat, Sphere: sphere, Bowl: bowl, MeshTerrain: gridded}
 
 
 def shape_of(terrain, row):
