@@ -368,3 +368,32 @@ velocity = [0.0, 1.0, 0.0]
         np.testing.assert_allclose(points, interpolated_points(cache, t)[0], atol=1e-6)
         centre = np.asarray(sphere.GetPointsAttr().Get(frame + 1), float).mean(axis=0)
         np.testing.assert_allclose(centre, [3.0, t, 0.0], atol=1e-5)
+
+
+def test_the_lookup_finds_the_exact_closest_point_on_the_walking_figure():
+    """The cape's figure (a fast-moving point cache: reach 9.5 cm, dozens of triangles per cell)
+    at three times: every point within reach gets libigl's exact signed distance to the
+    interpolated surface, whatever triangles the bounding spheres let the lookup skip."""
+    import igl
+
+    from springsim.terrains.deforming_mesh import REACH, deform, deformed_distance
+
+    scene = springsim.load_scene("cape")
+    figure = scene.terrains[1]
+    surface = figure.deforming_surface()
+    model = springsim.Simulation(scene).model.arrays
+    row, data = model.terrain_parameters[1], model.terrain_data
+    block = int(model.terrain_deforming[1])
+    reach = data[block + REACH]
+    rng = np.random.default_rng(1)
+    for t in (0.3, 1.1, 2.45):
+        deform(data, block, t)
+        vertices = surface_at(surface, t)
+        points = vertices[rng.integers(len(vertices), size=400)] \
+            + rng.uniform(-reach, reach, (400, 3))
+        exact = igl.signed_distance(points, vertices, surface.triangles,
+                                    sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
+        found = np.array([deformed_distance(row, data, *p)[0] for p in points])
+        near = np.abs(exact) < reach
+        assert near.sum() > 300
+        np.testing.assert_allclose(found[near], exact[near], rtol=0, atol=1e-12)
