@@ -216,9 +216,8 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     stiffness d (``tangential_stiffness``): c d / (c + d) |u_t|, at most the momentum d |u_t|
     it would take to stop the slip. A contact that friction holds on a turning support starts
     each step slipping by the support's acceleration times h (it moved on along a straight
-    line while the surface turned under it); c |u_t| alone read that as a kick, lowered c a
-    hundredfold every step and needed a second solve to restore it (benchmarks/moving_world.py:
-    the turning floor)."""
+    line while the surface turned under it); c |u_t| alone would read that as a kick, lower c
+    at every step and need a second solve to restore it."""
     if kind[i] != CONTACT or damping == 0.0:
         return damping
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]

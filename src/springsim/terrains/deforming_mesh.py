@@ -17,7 +17,7 @@ triangle's corners (``deformed_velocity``).
 A lookup skips a listed triangle whose bounding sphere (its centroid and farthest corner,
 refitted with the normals) lies farther than the closest triangle found so far: a cell lists
 every triangle within reach of any of its points, dozens to hundreds where a fast limb makes
-reach large (about 80 for the cape's cloth), and most are far from the point asking.
+reach large, and most are far from the point asking.
 ``reach`` is the larger of 4 contact bands (``epsilon``) and the farthest a vertex moves
 between two samples of the cache: a particle the surface passes within one sample is still
 found. The grid covers every sample's box grown by ``reach``; its cells are at least 2 reach
