@@ -103,17 +103,12 @@ class Gridded(NamedTuple):
 
     def gradient(self, x):
         (_, g, _), beyond = self.cells(x)
-        return np.where(np.any(beyond != 0.0, axis=1)[:, None], self.normals(x),
+        return np.where(np.any(beyond != 0.0, axis=1)[:, None], unit_normal(g, beyond),
                         g * self.inverse)
 
     def normals(self, x):
         (_, g, _), beyond = self.cells(x)
-        size = np.linalg.norm(g, axis=1)
-        n = np.where(size[:, None] > 0.0, g / np.where(size > 0.0, size, 1.0)[:, None],
-                     np.array([0.0, 1.0, 0.0]))
-        outside = np.linalg.norm(beyond, axis=1)
-        away = beyond / np.where(outside > 0.0, outside, 1.0)[:, None]
-        return np.where(outside[:, None] > 0.0, away, n)
+        return unit_normal(g, beyond)
 
     def curvature(self, x):
         """(dn/dx)^T = H (I - n n^T) / (|g| cell), H the cell's mixed second derivatives."""
@@ -124,6 +119,17 @@ class Gridded(NamedTuple):
         scale = np.where((size > 0.0) & ~np.any(beyond != 0.0, axis=1),
                          self.inverse / np.where(size > 0.0, size, 1.0), 0.0)
         return scale[:, None, None] * np.einsum("kij,kjl->kil", hessian, projector)
+
+
+def unit_normal(g, beyond):
+    """mesh_distance's normal: g / |g| ((0, 1, 0) where g is zero), or away from the grid
+    beyond it."""
+    size = np.linalg.norm(g, axis=1)
+    n = np.where(size[:, None] > 0.0, g / np.where(size > 0.0, size, 1.0)[:, None],
+                 np.array([0.0, 1.0, 0.0]))
+    outside = np.linalg.norm(beyond, axis=1)
+    away = beyond / np.where(outside > 0.0, outside, 1.0)[:, None]
+    return np.where(outside[:, None] > 0.0, away, n)
 
 
 def trilinear(c, fu, fv, fw):
