@@ -373,7 +373,7 @@ velocity = [0.0, 1.0, 0.0]
 def test_the_lookup_finds_the_exact_closest_point_on_the_walking_figure():
     """The cape's figure (a fast-moving point cache: reach 9.5 cm, dozens of triangles per cell)
     at three times: every point within reach gets libigl's exact signed distance to the
-    interpolated surface."""
+    interpolated surface, whatever triangles the bounding spheres let the lookup skip."""
     import igl
 
     from springsim.terrains.deforming_mesh import REACH, deform, deformed_distance

@@ -15,6 +15,10 @@ import numpy as np
 import pytest
 
 from springsim import Simulation, load_scene
+from springsim.bodies.cube import Cube
+from springsim.motion import Motion
+from springsim.scene import Scene
+from springsim.terrains import Plane
 
 SPEED, FRICTION, GRAVITY = 3.0, 0.3, 9.8   # m/s; the plane's default friction; m/s^2
 
@@ -43,3 +47,31 @@ def test_a_resting_cube_pushed_sideways_slides_the_coulomb_distance(dt):
     # 1.5%: the measured 0.5% (1/60 s) and 0.8% (1/30 s) of the lagging friction damper, with
     # room; the bug was 27% short
     assert travel == pytest.approx(backward_euler, rel=0.015)
+
+
+def test_a_cube_held_on_a_turning_platform_rides_round_with_one_solve_a_step():
+    """A contact that friction holds on a turning support starts each step slipping by the
+    support's acceleration times h; that is no kick, so the carried damper stays and each step
+    takes one solve (before the fix: the cap lowered it a hundredfold every step and a second
+    solve put it back). Oracle: static friction (mu g = 4.9 m/s^2 against the 0.09 m/s^2 the
+    turn needs) carries the cube round with the platform, omega t about its axis. Backward Euler
+    moves each step along the tangent at the step's end velocity, so the radius grows by
+    r (omega h)^2 / 2 a step: 0.75 mm in this second."""
+    omega, seconds = 0.3, 1.0
+    floor = Plane(point=(0.0, 0.0, 0.0), friction=0.5, restitution=0.0,
+                  motion=Motion(angular_velocity=(0.0, omega, 0.0)))
+    cube = Cube(particles_per_edge=3, edge_length=0.5, particle_mass=1.0,
+                position=(1.0, 0.26, 0.0), rotation_degrees=0.0)
+    simulation = Simulation(Scene(bodies=[cube], terrains=[floor]), integrator="implicit_euler",
+                            dt=1 / 60)
+    simulation.advance(1.0)   # landed and carried along
+    statistics = simulation.integrator.statistics
+    solves, start = int(statistics.linear_solves[0]), simulation.positions.mean(axis=0)
+    simulation.advance(seconds)
+    assert int(statistics.linear_solves[0]) - solves == 60
+    end = simulation.positions.mean(axis=0)
+    turned = np.arctan2(start[2], start[0]) - np.arctan2(end[2], end[0])   # about +y
+    assert turned == pytest.approx(omega * seconds, rel=1e-3)
+    drift = 60 * np.hypot(start[0], start[2]) * (omega / 60) ** 2 / 2
+    assert np.hypot(end[0], end[2]) - np.hypot(start[0], start[2]) == pytest.approx(drift,
+                                                                                   rel=0.05)

@@ -278,9 +278,12 @@ def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
     n = constraints.normal[index]
     gap = constraints.floor[index] - rowdot(u0[index], n)
     slip = np.linalg.norm(tangential(u0[index], n), axis=1)
-    impulse = -rowdot(b_sp[index], n) + gap * np.einsum("ki,kij,kj->k", n, blocks[index], n)
+    along_normal = np.einsum("ki,kij,kj->k", n, blocks[index], n)
+    impulse = -rowdot(b_sp[index], n) + gap * along_normal
     coulomb = physical.friction[constraints.terrain[index]] * np.maximum(impulse, 0.0)
-    over = c[index] * slip > coulomb
+    d = 0.5 * (np.trace(blocks[index], axis1=1, axis2=2) - along_normal)   # in series with c
+    taken = np.where(d > 0.0, c[index] * d / (c[index] + np.where(d > 0.0, d, 1.0)), c[index])
+    over = taken * slip > coulomb
     index, slip, impulse, gap = index[over], slip[over], impulse[over], gap[over]
     return index, c[index].copy(), slip, impulse, gap, np.where(
         slip > 0.0, coulomb[over] / np.where(slip > 0.0, slip, 1.0), 0.0)

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..terrains import Bowl, MeshTerrain, Plane, Sphere
+from ..terrains.mesh import trilinear as mesh_trilinear
 
 
 class Flat(NamedTuple):
@@ -74,7 +75,7 @@ class Round(NamedTuple):
 
 class Gridded(NamedTuple):
     """A still mesh's signed distance grid (terrains/mesh.py), trilinear in each cell as
-    ``mesh_distance`` interpolates it, in the kernel's arithmetic: phi, the normal (the
+    ``mesh_distance`` interpolates it, with the kernel's arithmetic: phi, the normal (the
     gradient's direction), the gradient, and the normal's derivative from the trilinear
     function's mixed second derivatives (it has no pure ones). Beyond the grid (free space,
     never touched) the normal points away from it and the curvature is zero."""
@@ -134,21 +135,11 @@ def unit_normal(g, beyond):
 
 def trilinear(c, fu, fv, fw):
     """(phi, its gradient in cells (K, 3), its second derivatives (K, 3, 3)) of the trilinear
-    function with corner values c[(a, b, d)] at the fractions (fu, fv, fw), in
-    terrains/mesh.mesh_distance's order of operations."""
-    c000, c001, c010, c011 = c[0, 0, 0], c[0, 0, 1], c[0, 1, 0], c[0, 1, 1]
-    c100, c101, c110, c111 = c[1, 0, 0], c[1, 0, 1], c[1, 1, 0], c[1, 1, 1]
-    c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
-    c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
-    c0, c1 = c00 + fv * (c10 - c00), c01 + fv * (c11 - c01)
-    phi = c0 + fw * (c1 - c0)
-    gw = c1 - c0
-    gv = (c10 - c00) + fw * ((c11 - c01) - (c10 - c00))
-    gu_0 = (c100 - c000) + fv * ((c110 - c010) - (c100 - c000))
-    gu_1 = (c101 - c001) + fv * ((c111 - c011) - (c101 - c001))
-    gu = gu_0 + fw * (gu_1 - gu_0)
-    uv_0, uv_1 = (c110 - c010) - (c100 - c000), (c111 - c011) - (c101 - c001)
-    uv, uw, vw = uv_0 + fw * (uv_1 - uv_0), gu_1 - gu_0, (c11 - c01) - (c10 - c00)
+    function with corner values c[(a, b, d)] at the fractions (fu, fv, fw): the kernel's own
+    arithmetic (terrains/mesh.trilinear), on arrays."""
+    phi, gu, gv, gw, uv, uw, vw = mesh_trilinear.py_func(
+        c[0, 0, 0], c[0, 0, 1], c[0, 1, 0], c[0, 1, 1], c[1, 0, 0], c[1, 0, 1], c[1, 1, 0],
+        c[1, 1, 1], fu, fv, fw)
     zero = np.zeros_like(phi)
     hessian = np.stack([np.stack([zero, uv, uw], -1), np.stack([uv, zero, vw], -1),
                         np.stack([uw, vw, zero], -1)], -2)

@@ -210,7 +210,14 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     stayed put: the reaction n . (A_ii ddv_i - b_i) of the particle's own block, with ddv_i the
     velocity change that holds it on its floor (``hold_constrained``) and no friction in A_ii
     or b_i yet. For a resting or steadily sliding contact it is the load it carries (the
-    springs and gravity in b), and the cap leaves c as it was."""
+    springs and gravity in b), and the cap leaves c as it was.
+
+    The impulse that c can take is that of c in series with the particle's own tangential
+    stiffness d (``tangential_stiffness``): c d / (c + d) |u_t|, at most the momentum d |u_t|
+    it would take to stop the slip. A contact that friction holds on a turning support starts
+    each step slipping by the support's acceleration times h (it moved on along a straight
+    line while the surface turned under it); c |u_t| alone would read that as a kick, lower c
+    at every step and need a second solve to restore it."""
     if kind[i] != CONTACT or damping == 0.0:
         return damping
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
@@ -224,9 +231,24 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
         for c in range(3):
             impulse_n += normal[i, r] * blocks[slot, r, c] * ddv[i, c]
     coulomb = model.terrain_friction[terrain[i]] * max(impulse_n, 0.0)
-    if damping * slip > coulomb:
+    d = tangential_stiffness(pattern, blocks, normal, i)
+    taken = damping * d / (damping + d) if d > 0.0 else damping
+    if taken * slip > coulomb:
         return coulomb / slip
     return damping
+
+
+@kernel
+def tangential_stiffness(pattern, blocks, normal, i):
+    """Half the trace of particle i's diagonal block across its normal: (trace - n^T A_ii n)
+    / 2, how much momentum a unit tangential velocity change of it takes."""
+    slot = pattern.diagonal_slot[i]
+    along_normal = 0.0
+    for r in range(3):
+        for c in range(3):
+            along_normal += normal[i, r] * blocks[slot, r, c] * normal[i, c]
+    trace = blocks[slot, 0, 0] + blocks[slot, 1, 1] + blocks[slot, 2, 2]
+    return 0.5 * (trace - along_normal)
 
 
 @kernel
@@ -237,13 +259,7 @@ def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
     the tangential momentum p = (d + c) slip. Coulomb friction removes min(p, coulomb) of it:
     it slides on at (p - coulomb) / d > SLIP_SPEED with c = coulomb / slip, or it holds, with
     c = coulomb / SLIP_SPEED."""
-    slot = pattern.diagonal_slot[i]
-    along_normal = 0.0
-    for r in range(3):
-        for c in range(3):
-            along_normal += normal[i, r] * blocks[slot, r, c] * normal[i, c]
-    trace = blocks[slot, 0, 0] + blocks[slot, 1, 1] + blocks[slot, 2, 2]
-    stiffness = 0.5 * (trace - along_normal) - damping
+    stiffness = tangential_stiffness(pattern, blocks, normal, i) - damping
     momentum = (stiffness + damping) * slip
     sliding = (momentum - coulomb) / stiffness
     if sliding > SLIP_SPEED:

@@ -14,6 +14,10 @@ for a closed mesh and gives an open one the side its faces' normals point to, as
 mesh's libigl distances do. Contact velocity is the closest point's, interpolated from its
 triangle's corners (``deformed_velocity``).
 
+A lookup skips a listed triangle whose bounding sphere (its centroid and farthest corner,
+refitted with the normals) lies farther than the closest triangle found so far: a cell lists
+every triangle within reach of any of its points, dozens to hundreds where a fast limb makes
+reach large, and most are far from the point asking.
 ``reach`` is the larger of 4 contact bands (``epsilon``) and the farthest a vertex moves
 between two samples of the cache: a particle the surface passes within one sample is still
 found. The grid covers every sample's box grown by ``reach``; its cells are at least 2 reach
@@ -25,7 +29,7 @@ The data block of one deforming terrain, in the shared terrain_data (offsets fro
 ``layout``): a header (vertex, triangle, edge and sample counts, entry capacity, the time last
 refitted to, reach, cell count, the grid's origin, cell size and counts), the sample times, the
 samples, the triangles and their edges, then what ``deform`` writes: positions, velocities,
-vertex, edge and face normals, cell starts and entries.
+vertex, edge and face normals, the triangles' bounding spheres, cell starts and entries.
 """
 import math
 from dataclasses import dataclass
@@ -59,10 +63,11 @@ def layout(data, s):
     vertex_normals = velocities + 3 * v
     edge_normals = vertex_normals + 3 * v
     face_normals = edge_normals + 3 * e
-    cell_starts = face_normals + 3 * t
+    spheres = face_normals + 3 * t
+    cell_starts = spheres + 4 * t
     entries = cell_starts + c + 1
     return (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
-            edge_normals, face_normals, cell_starts, entries)
+            edge_normals, face_normals, spheres, cell_starts, entries)
 
 
 @kernel
@@ -71,10 +76,10 @@ def deform(data, s, t):
     if data[s + LAST_TIME] == t:
         return
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
-     edge_normals, face_normals, cell_starts, entries) = layout(data, s)
+     edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     interpolate(data, s, t, times, samples, positions, velocities)
     refit_normals(data, s, triangles, triangle_edges, positions, vertex_normals, edge_normals,
-                  face_normals)
+                  face_normals, spheres)
     refit_cells(data, s, triangles, positions, cell_starts, entries)
     data[s + LAST_TIME] = t
 
@@ -102,8 +107,9 @@ def interpolate(data, s, t, times, samples, positions, velocities):
 
 @kernel
 def refit_normals(data, s, triangles, triangle_edges, positions, vertex_normals, edge_normals,
-                  face_normals):
-    """Unit face normals; edge normals (the sum of their faces'); angle-weighted vertex normals."""
+                  face_normals, spheres):
+    """Unit face normals; edge normals (the sum of their faces'); angle-weighted vertex normals;
+    and each triangle's bounding sphere (``bounding_sphere``), in the same pass."""
     v, t, e = int(data[s + VERTICES]), int(data[s + TRIANGLES]), int(data[s + EDGES])
     for i in range(3 * v):
         data[vertex_normals + i] = 0.0
@@ -117,6 +123,7 @@ def refit_normals(data, s, triangles, triangle_edges, positions, vertex_normals,
         data[face_normals + 3 * tri] = n0
         data[face_normals + 3 * tri + 1] = n1
         data[face_normals + 3 * tri + 2] = n2
+        bounding_sphere(data, positions, a, b, c, spheres + 4 * tri)
         for k in range(3):
             edge = int(data[triangle_edges + 3 * tri + k])
             data[edge_normals + 3 * edge] += n0
@@ -127,6 +134,23 @@ def refit_normals(data, s, triangles, triangle_edges, positions, vertex_normals,
             data[vertex_normals + 3 * corner[k]] += angle * n0
             data[vertex_normals + 3 * corner[k] + 1] += angle * n1
             data[vertex_normals + 3 * corner[k] + 2] += angle * n2
+
+
+@kernel
+def bounding_sphere(data, positions, a, b, c, out):
+    """data[out:out + 4] = the centroid of corners a, b, c and the distance to the farthest,
+    grown by a part in 10^9 so that rounding never leaves a corner outside."""
+    pa, pb, pc = positions + 3 * a, positions + 3 * b, positions + 3 * c
+    third = 1.0 / 3.0
+    c0 = (data[pa] + data[pb] + data[pc]) * third
+    c1 = (data[pa + 1] + data[pb + 1] + data[pc + 1]) * third
+    c2 = (data[pa + 2] + data[pb + 2] + data[pc + 2]) * third
+    farthest = 0.0
+    for p in (pa, pb, pc):
+        d0, d1, d2 = data[p] - c0, data[p + 1] - c1, data[p + 2] - c2
+        farthest = max(farthest, d0 * d0 + d1 * d1 + d2 * d2)
+    data[out], data[out + 1], data[out + 2] = c0, c1, c2
+    data[out + 3] = math.sqrt(farthest) * (1.0 + 1e-9)
 
 
 @kernel
@@ -220,9 +244,11 @@ def triangle_box(data, triangles, positions, tri, low, high):
 @kernel
 def closest_triangle(data, s, x0, x1, x2):
     """(squared distance, triangle, barycentric weights) of the point of the surface closest to
-    x among the triangles listed in x's cell; triangle -1 when none is within reach."""
+    x among the triangles listed in x's cell; triangle -1 when none is within reach. A triangle
+    whose bounding sphere is farther than the best so far is skipped (module doc)."""
     reach = data[s + REACH]
     best, found, w0, w1, w2 = reach * reach, -1, 0.0, 0.0, 0.0
+    bound = reach   # sqrt(best)
     cell = data[s + CELL]
     index = 0
     for axis in range(3):
@@ -233,9 +259,14 @@ def closest_triangle(data, s, x0, x1, x2):
             return best, -1, w0, w1, w2
         index = index * n + i
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
-     edge_normals, face_normals, cell_starts, entries) = layout(data, s)
+     edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     for e in range(int(data[cell_starts + index]), int(data[cell_starts + index + 1])):
         tri = int(data[entries + e])
+        g0, g1, g2 = (x0 - data[spheres + 4 * tri], x1 - data[spheres + 4 * tri + 1],
+                      x2 - data[spheres + 4 * tri + 2])
+        far = bound + data[spheres + 4 * tri + 3]
+        if g0 * g0 + g1 * g1 + g2 * g2 > far * far:
+            continue
         a, b, c = (int(data[triangles + 3 * tri]), int(data[triangles + 3 * tri + 1]),
                    int(data[triangles + 3 * tri + 2]))
         corners = ((data[positions + 3 * a], data[positions + 3 * a + 1],
@@ -251,6 +282,7 @@ def closest_triangle(data, s, x0, x1, x2):
         squared = d0 * d0 + d1 * d1 + d2 * d2
         if squared < best:
             best, found, w0, w1, w2 = squared, tri, u0, u1, u2
+            bound = math.sqrt(best)
     return best, found, w0, w1, w2
 
 
@@ -263,7 +295,7 @@ def deformed_distance(row, data, x0, x1, x2):
     if tri < 0:
         return data[s + REACH], 0.0, 1.0, 0.0
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
-     edge_normals, face_normals, cell_starts, entries) = layout(data, s)
+     edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     p0 = p1 = p2 = 0.0
     for k, w in enumerate((w0, w1, w2)):
         corner = int(data[triangles + 3 * tri + k])
@@ -299,7 +331,7 @@ def deformed_velocity(data, s, x0, x1, x2):
     if tri < 0:
         return 0.0, 0.0, 0.0
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
-     edge_normals, face_normals, cell_starts, entries) = layout(data, s)
+     edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     u0 = u1 = u2 = 0.0
     for k, w in enumerate((w0, w1, w2)):
         corner = int(data[triangles + 3 * tri + k])
@@ -368,7 +400,7 @@ class DeformingSurface:
             count, len(self.triangles), len(edges), len(self.times), capacity, np.nan, reach,
             cells]
         header[ORIGIN:ORIGIN + 3], header[CELL], header[COUNTS:COUNTS + 3] = origin, cell, counts
-        written = np.zeros(3 * count * 3 + 3 * len(edges) + 3 * len(self.triangles)
+        written = np.zeros(3 * count * 3 + 3 * len(edges) + 7 * len(self.triangles)
                            + cells + 1 + capacity)
         block = np.concatenate([header, self.times, self.samples.ravel(),
                                 self.triangles.ravel().astype(float),

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..errors import SceneError, require
 from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_mesh,
                          read_mesh_file, validate_placement)
@@ -41,6 +41,27 @@ PROBES = 512   # a moving mesh's vertices whose travel bounds its surface's (sub
 BAND_CELLS = 3          # nodes within this many cells of the surface get exact distances
 MARGIN_CELLS = 4        # the grid reaches this many cells beyond the mesh's box
 MAX_NODES = 8_000_000   # 64 MB of float64: the grid's size limit
+
+
+@inline_kernel
+def trilinear(c000, c001, c010, c011, c100, c101, c110, c111, fu, fv, fw):
+    """The trilinear function of a cell's corner values c_abd at the fractions (fu, fv, fw):
+    (phi, its gradient in cells gu, gv, gw, then the mixed second derivatives d2/du dv,
+    d2/du dw, d2/dv dw; it has no pure ones). Scalars in the kernels; NumPy arrays through
+    ``trilinear.py_func`` in the gradients' contact (gradients/terrain_shapes.py), which so
+    computes the kernel's bits."""
+    c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
+    c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
+    c0, c1 = c00 + fv * (c10 - c00), c01 + fv * (c11 - c01)
+    phi = c0 + fw * (c1 - c0)
+    gw = c1 - c0
+    gv = (c10 - c00) + fw * ((c11 - c01) - (c10 - c00))
+    gu_0 = (c100 - c000) + fv * ((c110 - c010) - (c100 - c000))
+    gu_1 = (c101 - c001) + fv * ((c111 - c011) - (c101 - c001))
+    gu = gu_0 + fw * (gu_1 - gu_0)
+    uv_0, uv_1 = (c110 - c010) - (c100 - c000), (c111 - c011) - (c101 - c001)
+    return (phi, gu, gv, gw, uv_0 + fw * (uv_1 - uv_0), gu_1 - gu_0,
+            (c11 - c01) - (c10 - c00))
 
 
 @kernel
@@ -62,15 +83,7 @@ def mesh_distance(row, data, x0, x1, x2):
     c100, c101 = data[base + di], data[base + di + one]
     c110, c111 = data[base + di + dj], data[base + di + dj + one]
     # trilinear interpolation, and its gradient (per cell) as the normal
-    c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
-    c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
-    c0, c1 = c00 + fv * (c10 - c00), c01 + fv * (c11 - c01)
-    phi = c0 + fw * (c1 - c0)
-    gw = c1 - c0
-    gv = (c10 - c00) + fw * ((c11 - c01) - (c10 - c00))
-    gu_0 = (c100 - c000) + fv * ((c110 - c010) - (c100 - c000))
-    gu_1 = (c101 - c001) + fv * ((c111 - c011) - (c101 - c001))
-    gu = gu_0 + fw * (gu_1 - gu_0)
+    phi, gu, gv, gw = trilinear(c000, c001, c010, c011, c100, c101, c110, c111, fu, fv, fw)[:4]
     du, dv, dw = u - cu, v - cv, w - cw
     if du != 0.0 or dv != 0.0 or dw != 0.0:
         # beyond the grid: free space, the normal pointing away from the grid
