@@ -93,3 +93,64 @@ def test_a_run_compiled_here_and_one_loaded_from_the_cache_are_bit_identical():
     there = subprocess.run([sys.executable, "-c", FOLDED_CLOTH_RUN + "print(folded_cloth_run())"],
                            check=True, capture_output=True, text=True, timeout=600).stdout
     assert there.split()[-1] == here
+
+
+SORTS = """
+import numpy as np
+from numba import njit
+
+@njit(cache=True)
+def by_argsort(a):
+    return a[np.argsort(a)]
+
+@njit(cache=True)
+def by_sort(a):
+    return np.sort(a)
+
+@njit(cache=True)
+def both(a):
+    return by_sort(a), by_argsort(a)
+"""
+# A process compiles one of the kernels above into the shared cache, its function counter
+# first moved on by ``skip``, and prints whether its answers are sorted.
+SORTS_RUN = """
+import sys
+import numpy as np
+if sys.argv[1] == "springsim":
+    import springsim._jit
+from numba.core.bytecode import FunctionIdentity
+for _ in range(int(sys.argv[3])):
+    next(FunctionIdentity._unique_ids)
+import sorts
+a = np.random.default_rng(0).integers(0, 1000, 200)
+answers = getattr(sorts, sys.argv[2])(a)
+answers = answers if isinstance(answers, tuple) else (answers,)
+print(all(np.array_equal(answer, np.sort(a)) for answer in answers))
+"""
+
+
+def sorted_in_three_processes(tmp_path, importing):
+    """Whether a kernel calling np.sort and np.argsort sorts right when each of those was
+    compiled and cached by a process of its own, the argsort one three function ids ahead:
+    then, with Numba's own numbering, both processes give quicksort's run_quicksort1 the same
+    symbol, one body sorting, the other arg-sorting (numba 0.68)."""
+    import subprocess
+    import sys
+
+    tmp_path.mkdir()
+    (tmp_path / "sorts.py").write_text(SORTS)
+    (tmp_path / "run.py").write_text(SORTS_RUN)
+    path = os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=path)
+    answers = [subprocess.run([sys.executable, str(tmp_path / "run.py"), importing, kernel, skip],
+                              env=env, capture_output=True, text=True, timeout=300).stdout.split()
+               for kernel, skip in (("by_argsort", "3"), ("by_sort", "0"), ("both", "0"))]
+    return [answer[-1] if answer else "crashed" for answer in answers]
+
+
+def test_kernels_cached_by_different_processes_link_without_symbol_collisions(tmp_path):
+    """springsim numbers each process's compiled functions from a random start (_jit's module
+    doc); with Numba's own numbering the same three processes end with a kernel that sorts
+    wrong (the control: if it stops failing, Numba has fixed numba#10486)."""
+    assert sorted_in_three_processes(tmp_path / "numba", "numba") == ["True", "True", "False"]
+    assert sorted_in_three_processes(tmp_path / "springsim", "springsim") == ["True"] * 3

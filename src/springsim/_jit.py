@@ -17,17 +17,30 @@ this one, and every springsim module they import, transitively. Editing any of t
 cache; editing the rest (the command line, the viewer, recording) keeps the compiled kernels. Each
 import marks its folder as used, and folders of other versions left unused for STALE_DAYS are
 deleted. Setting NUMBA_CACHE_DIR overrides all of this.
+
+Numba names each compiled function by its qualified name, its argument types and a counter
+that starts at 1 in every process (``numba.core.bytecode.FunctionIdentity``). Functions made by
+one factory share name and types: Numba's quicksort behind ``np.sort`` and the one behind
+``np.argsort`` both define ``partition(A, R, low, high)`` for int64 arrays. Two processes can
+thus give two different bodies one symbol; once both are cached, a kernel compiled later links
+both, LLVM keeps one body under that name, and argsort runs sort's partition (numba#10486):
+wrong contact orders, or a crash. ``distinct_function_ids`` starts each process's counter at a
+random 63-bit offset, so that no two processes share an id (tests/test_cache.py rebuilds the
+collision).
 """
 import ast
 import hashlib
+import itertools
 import os
 import re
+import secrets
 import shutil
 import time
 from pathlib import Path
 
 import numba
 from numba import njit
+from numba.core.bytecode import FunctionIdentity
 
 FASTMATH = False   # strict IEEE arithmetic: the same bits however compiled (module doc)
 STALE_DAYS = 30
@@ -119,6 +132,12 @@ def remove_stale_caches(parent: Path, keep: Path, now: float | None = None) -> l
     return deleted
 
 
+def distinct_function_ids() -> None:
+    """Number the functions this process compiles from a random 63-bit start (module doc)."""
+    FunctionIdentity._unique_ids = itertools.count(secrets.randbits(63))
+
+
+distinct_function_ids()
 _use_versioned_cache()
 
 
