@@ -307,7 +307,9 @@ def test_kernels_match_their_numpy_references():
                                 np.zeros(6), np.zeros((1, 4)), np.zeros((0, 8)),
                                 np.zeros((0, 3), np.int64), np.zeros(0), np.zeros(2),
                                 np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3)),
-                                np.zeros(0), np.zeros(0), np.zeros((0, 1)), np.zeros((0, 1)))
+                                np.zeros(0), np.zeros(0), np.zeros((0, 1)), np.zeros((0, 1)),
+                                np.zeros((0, 4), np.int64), np.zeros((0, 4)), np.zeros(0),
+                                np.zeros(0))
     h = 0.01
     calls = [
         lambda f, xb, ub, bar: f["spring_forces_vjp"](physical, x, v, g, xb, ub, bar),

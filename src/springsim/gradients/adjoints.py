@@ -10,10 +10,13 @@ start, the step's start time in ``physical.clock`` (clock.py); each force evalua
 own time there first, as the forward's stages move the world. The explicit methods' terrain
 contact (still planes, spheres, bowls and meshes: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
-in NumPy from the step's start to know what it did.
+in NumPy from the step's start to know what it did; the hard attachments are held just before
+that pass (attachments.py), the same way.
 """
 import numpy as np
 
+from ..errors import SceneError
+from .attachments import hold, hold_vjp, holds
 from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
 from .physics import step_accelerations, step_accelerations_vjp
@@ -51,9 +54,15 @@ class ExplicitAdjoint(Adjoint):
         x, v = place(physical, *start)
         x_new, v_new, stages = self.update(physical, h, x, v)
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
+        held = None
+        if holds(physical):   # the pins on paths are placed first, at the step's end
+            at_time(physical, h)
+            x_new, v_new, held = hold(physical, *place(physical, x_new, v_new))
         if len(physical.friction):
             _, _, found = impacts(physical, x_new, v_new)
             x_bar, v_bar = impacts_vjp(physical, found, x_bar, v_bar, bar)
+        if held is not None:
+            x_bar, v_bar = hold_vjp(physical, held, x_bar, v_bar, bar)
         release(physical, x_bar, v_bar)   # the pins on paths were put on them after the update
         x_bar, v_bar = self.update_vjp(physical, h, x, v, stages, x_bar, v_bar, bar)
         release(physical, x_bar, v_bar)   # and before it
@@ -112,8 +121,8 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        if blows(physical) or soft(physical).any() or not far_from_terrains(physical, h, start,
-                                                                             end):
+        if (blows(physical) or soft(physical).any() or len(physical.attachment_nodes)
+                or not far_from_terrains(physical, h, start, end)):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         at_time(physical, 0.0)
         x, v = place(physical, start[0], start[1])
@@ -149,7 +158,7 @@ class RK4Adjoint(ExplicitAdjoint):
         at_time(physical, h)
         a4, t4 = step_accelerations(physical, x4, v4, h)
         stages = ((x2, v2, t2), (x3, v3, t3), (x4, v4, t4), t1)
-        if not len(physical.friction):   # no impact pass: the end state is not needed
+        if not len(physical.friction) and not holds(physical):   # the end state is not needed
             return None, None, stages
         # the forward's arithmetic order (rk4.first_stage .. last_stage)
         dx = v + 2.0 * v2 + 2.0 * v3
@@ -202,6 +211,10 @@ class ImplicitEulerAdjoint(Adjoint):
         release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
         v = aim(physical, x, v, h)
         if len(start) == 3 and touches_planes(physical, h, start, end):
+            if holds(physical):
+                raise SceneError("attachments", "hard", "hold bodies that touch a terrain "
+                                 "under implicit_euler, which gradients do not follow yet: "
+                                 "give the attachments a stiffness")
             kind, terrain, dampers = start[2]
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
             _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
@@ -209,18 +222,32 @@ class ImplicitEulerAdjoint(Adjoint):
                                                              v_bar, carried, bar)
         else:
             self.carried_bar = None   # a step without contacts leaves no damper behind
-            x_bar, v_bar = self.newton_vjp(physical, h, x, v, end, x_bar, v_bar, bar)
+            estimates = None
+            if holds(physical):   # the step's end before the hold: its last solve again
+                estimates = self.estimates(physical, h, x, v, None)
+                v_end = v + estimates[-1]
+                x_end, v_end, held = hold(physical, *place(physical, x + h * v_end, v_end))
+                x_bar, v_bar = hold_vjp(physical, held, x_bar, v_bar, bar)
+            x_bar, v_bar = self.newton_vjp(physical, h, x, v, end, x_bar, v_bar, bar,
+                                           estimates)
         release(physical, x_bar, v_bar)   # placed at the step's start, then aimed
         return x_bar, v_bar
 
-    def newton_vjp(self, physical, h, x, v, end, x_bar, v_bar, bar):
-        """The Newton iterations backwards (class doc), from the step's end to (x, v)."""
+    def estimates(self, physical, h, x, v, dv_end):
+        """solve.newton_estimates with the forward's own solver (made on first use)."""
         if self.solver is None:
             self.solver = ForwardSolver(self.model, self.integrator)
+        return newton_estimates(physical, h, x, v, dv_end, self.integrator.newton_iterations,
+                                self.solver)
+
+    def newton_vjp(self, physical, h, x, v, end, x_bar, v_bar, bar, estimates=None):
+        """The Newton iterations backwards (class doc), from the step's end to (x, v);
+        ``estimates`` if they are known already."""
         iterations = self.integrator.newton_iterations
-        # the solve holds every pinned particle's velocity: dv is zero there
-        dv_end = np.where(physical.free[:, None], end[1] - v, 0.0)
-        estimates = newton_estimates(physical, h, x, v, dv_end, iterations, self.solver)
+        if estimates is None:
+            # the solve holds every pinned particle's velocity: dv is zero there
+            dv_end = np.where(physical.free[:, None], end[1] - v, 0.0)
+            estimates = self.estimates(physical, h, x, v, dv_end)
         dv_bar = v_bar + h * x_bar
         x_bar, v_bar = x_bar.copy(), dv_bar.copy()
         for k in reversed(range(iterations)):

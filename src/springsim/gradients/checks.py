@@ -2,13 +2,15 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag, the wind on surfaces (wind.py) and pins that hold, move or are soft
-(pins.py); contact with still planes (contact.py, implicit_contact.py), and with still spheres
-and bowls under the explicit methods (contact.py). Not yet covered, so refused rather than given
-a gradient that leaves a force out: attachments, contact with meshes, with moving or deforming
-terrains and with curved ones under implicit_euler, body-body and ball contact (and with them
-the wind on balls). A terrain the adjoint does not follow may be in the scene as long as no
-particle comes within its contact band during the run.
+dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
+(pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
+implicit_contact.py), and with still spheres, bowls and meshes under the explicit methods
+(contact.py). Not yet covered, so refused rather than given a gradient that leaves a force out:
+contact with moving or deforming terrains and with curved ones under implicit_euler, hard
+attachments on bodies that touch a terrain under implicit_euler (adjoints.py refuses them at
+that step), body-body and ball contact (and with them the wind on balls). A terrain the
+adjoint does not follow may be in the scene as long as no particle comes within its contact
+band during the run.
 """
 import numpy as np
 
@@ -22,9 +24,6 @@ def check_supported(simulation) -> None:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
                          + ", ".join(ADJOINTS))
     arrays = simulation.model.arrays
-    if arrays.attachment_nodes.shape[0]:
-        raise SceneError("attachments", f"{arrays.attachment_nodes.shape[0]} bound particles",
-                         "gradients do not follow attachments yet")
     if arrays.balls.shape[0]:
         raise SceneError("bodies", "balls", "touch by ball contact, which gradients do not "
                          "follow yet")

@@ -39,6 +39,7 @@ from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import along, impacts, impacts_vjp, plane_distance
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
+from .attachments import attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp
 from .pins import pin_blocks, pin_blocks_vjp
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
@@ -175,7 +176,7 @@ class Replay(NamedTuple):
 
 def diagonal_blocks(physical, x_k, v_k, h):
     """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag,
-    the wind's and soft pins' blocks and every spring's C = p l l^T + q I
+    the wind's, soft pins' and soft attachments' blocks and every spring's C = p l l^T + q I
     (physics.system_product)."""
     springs = geometry(physical, x_k)
     along_, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -188,7 +189,8 @@ def diagonal_blocks(physical, x_k, v_k, h):
     np.add.at(out, physical.a, blocks)
     np.add.at(out, physical.b, blocks)
     out += (physical.solve_mass + h * physical.drag)[:, None, None] * np.eye(3)
-    return out + wind_blocks(physical, x_k, v_k, h) + pin_blocks(physical, len(x_k), h)
+    return (out + wind_blocks(physical, x_k, v_k, h) + pin_blocks(physical, len(x_k), h)
+            + attachment_diagonal(physical, len(x_k), h))
 
 
 def held(constraints, kind, u0):
@@ -449,6 +451,7 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar)
     wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
     pin_blocks_vjp(physical, h, weights, bar)
+    attachment_diagonal_vjp(physical, h, weights, bar)
     dv_start_bar = dv_bar + u0_bar - physical.solve_mass[:, None] * b_bar
     rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, b_bar, out_x, out_v, xk_bar, vk_bar, bar)
     out_v += u0_bar
@@ -551,11 +554,12 @@ def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, f
 
 def matrix_vjp(physical, h, estimate, u, g, estimate_bar, bar):
     """Add g . d(A u)/d(x_k, v_k, parameters), u held fixed: the springs', the wind's and the
-    soft pins'."""
+    soft pins' and the soft attachments'."""
     system_product_vjp(physical, estimate[0], u, g, h, estimate_bar[0], bar)
     weights = outer_weights(g, u)
     wind_blocks_vjp(physical, *estimate, h, weights, *estimate_bar, bar)
     pin_blocks_vjp(physical, h, weights, bar)
+    attachment_product_vjp(physical, u, g, h, bar)
 
 
 def diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar):

@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels
+from .attachments import attachment_forces, attachment_forces_vjp
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
 from .pins import pin_forces, pin_forces_vjp
 from .wind import wind_forces, wind_forces_vjp
@@ -54,6 +55,10 @@ class Physical(NamedTuple):
     pin_damping: np.ndarray     # (Q,) N s/m
     motion_info: np.ndarray     # the motions (motion.pack_motions)
     motion_keys: np.ndarray
+    attachment_nodes: np.ndarray      # (A, 4) each binding's particles (attachments.py)
+    attachment_weights: np.ndarray    # (A, 4) and weights, summing to zero
+    attachment_stiffness: np.ndarray  # (A,) N/m, 0 for a hard binding
+    attachment_damping: np.ndarray    # (A,) N s/m
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -72,7 +77,11 @@ class Physical(NamedTuple):
                    arrays.wind_weights.astype(float), np.zeros(2),
                    arrays.pin_particles.astype(np.int64), arrays.pin_motion.astype(np.int64),
                    arrays.pin_placed.astype(float), arrays.pin_stiffness.astype(float),
-                   arrays.pin_damping.astype(float), arrays.motion_info, arrays.motion_keys)
+                   arrays.pin_damping.astype(float), arrays.motion_info, arrays.motion_keys,
+                   arrays.attachment_nodes.astype(np.int64),
+                   arrays.attachment_weights.astype(float),
+                   arrays.attachment_stiffness.astype(float),
+                   arrays.attachment_damping.astype(float))
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -102,6 +111,8 @@ class Cotangents:
     wind_modes: np.ndarray
     pin_stiffness: np.ndarray
     pin_damping: np.ndarray
+    attachment_stiffness: np.ndarray
+    attachment_damping: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
@@ -185,7 +196,8 @@ def accelerations(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarra
     force = spring_forces(physical, x, v)
     return (w[:, None] * (force - physical.drag[:, None] * v)
             + np.where(physical.free[:, None], physical.gravity, 0.0)
-            + w[:, None] * (wind_forces(physical, x, v) + pin_forces(physical, x, v)))
+            + w[:, None] * (wind_forces(physical, x, v) + pin_forces(physical, x, v)
+                            + attachment_forces(physical, x, v)))
 
 
 def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
@@ -193,7 +205,7 @@ def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents
     w = physical.inv_mass
     force = spring_forces(physical, x, v)
     net = (force - physical.drag[:, None] * v + wind_forces(physical, x, v)
-           + pin_forces(physical, x, v))
+           + pin_forces(physical, x, v) + attachment_forces(physical, x, v))
     free = physical.free
     bar.gravity += g[free].sum(axis=0)
     bar.mass -= np.where(free, w * w * dot(g, net), 0.0)
@@ -202,6 +214,7 @@ def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
     wind_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
     pin_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+    attachment_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
 
 
 def step_accelerations(physical: Physical, x, v, h):

@@ -13,6 +13,9 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import linalg
 
+from .attachments import (attachment_forces, attachment_forces_vjp, attachment_product_vjp,
+                          first_iteration_rhs as attachment_rhs,
+                          first_iteration_rhs_vjp as attachment_rhs_vjp, matrix_entries)
 from .physics import (
     geometry,
     spring_forces,
@@ -52,17 +55,21 @@ class ForwardSolver:
         self.kind = np.where(model.pinned, PINNED, FREE).astype(np.int8)
         self.normal = np.zeros((count, 3))
         self.work = [np.zeros((count, 3)) for _ in range(4)]
+        self.unused_rhs = np.zeros((count, 3))
         self.tolerance = integrator.cg_tolerance
         self.max_iterations = integrator.cg_max_iterations
         self.iterations = 0   # CG iterations, for diagnostics
 
     def assemble(self, physical, x, v, h):
         """The system matrix A at the estimate (x, v) (kept for ``solve``); v enters through the
-        wind's blocks alone."""
+        wind's blocks alone. The soft attachments' blocks are the forward's own."""
+        from ..attachments import add_attachment_jacobian
         from ..implicit.jacobian import assemble_diagonal_and_terms
 
         assemble_diagonal_and_terms(self.arrays, self.layout.diagonal, x, 1.0, h, h * h,
                                     self.blocks, self.terms)
+        add_attachment_jacobian(self.arrays, self.layout.attachment_slots, h, False, v,
+                                self.blocks, self.unused_rhs)
         slots = self.layout.diagonal.diagonal_slot
         self.blocks[slots] += pin_blocks(physical, len(x), h)
         if blows(physical):
@@ -84,8 +91,8 @@ class ForwardSolver:
 
 def system_matrix(physical, x, v, h):
     """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag, the
-    wind's and soft pins' blocks, and every spring's block C = p l l^T + q I added to (a, a),
-    (b, b) and subtracted from (a, b), (b, a)."""
+    wind's and soft pins' blocks, every spring's block C = p l l^T + q I added to (a, a),
+    (b, b) and subtracted from (a, b), (b, a), and the soft attachments' blocks."""
     count = x.shape[0]
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -108,6 +115,8 @@ def system_matrix(physical, x, v, h):
     rows.append((particle + np.arange(3)[None, :, None]).repeat(3, axis=2))
     cols.append((particle + np.arange(3)[None, None, :]).repeat(3, axis=1))
     values.append(wind_blocks(physical, x, v, h) + pin_blocks(physical, count, h))
+    for entries, entry in zip((rows, cols, values), matrix_entries(physical, h)):
+        entries.append(entry)
     matrix = sparse.coo_matrix((np.concatenate([v.ravel() for v in values]),
                                 (np.concatenate([r.ravel() for r in rows]),
                                  np.concatenate([c.ravel() for c in cols]))),
@@ -143,9 +152,11 @@ def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, v
     vk_bar -= h * physical.drag[:, None] * lam
     wind_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     pin_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
+    attachment_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     if first:
         stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
         first_iteration_rhs_vjp(physical, v, h, lam, v_bar, bar)
+        attachment_rhs_vjp(physical, v, h, lam, v_bar, bar)
 
 
 def estimate(x, v, dv, h, first):
@@ -158,28 +169,30 @@ def estimate(x, v, dv, h, first):
 
 def newton_rhs(physical, h, x, v, dv, first):
     """r_k = h (F(x_k, v_k) + m g - c v_k) - M dv_k (+ h^2 dF/dx(x) v in the first); F with
-    the wind's and the soft pins' forces."""
+    the wind's, the soft pins' and the soft attachments' forces."""
     x_k, v_k = estimate(x, v, dv, h, first)
     external = (np.where(physical.free[:, None], physical.mass[:, None] * physical.gravity, 0.0)
                 - physical.drag[:, None] * v_k + wind_forces(physical, x_k, v_k)
-                + pin_forces(physical, x_k, v_k))
+                + pin_forces(physical, x_k, v_k) + attachment_forces(physical, x_k, v_k))
     rhs = h * (spring_forces(physical, x_k, v_k) + external) - physical.solve_mass[:, None] * dv
     if first:
-        rhs += h * h * stiffness_product(physical, x, v) + first_iteration_rhs(physical, v, h)
+        rhs += (h * h * stiffness_product(physical, x, v) + first_iteration_rhs(physical, v, h)
+                + attachment_rhs(physical, v, h))
     return rhs
 
 
 def newton_estimates(physical, h, x, v, dv_end, iterations, solver):
     """[dv_0 = 0, dv_1, ..., dv_K = dv_end]: the velocity changes after each Newton iteration,
     the last as the simulation computed it, the others solved again (``solver``: a
-    ForwardSolver)."""
+    ForwardSolver). With dv_end None the last is solved again too."""
     dv = [np.zeros_like(x)]
-    for k in range(iterations - 1):
+    for k in range(iterations - (1 if dv_end is not None else 0)):
         x_k, v_k = estimate(x, v, dv[-1], h, k == 0)
         rhs = newton_rhs(physical, h, x, v, dv[-1], k == 0)
         solver.assemble(physical, x_k, v_k, h)
         dv.append(dv[-1] + solver.solve(rhs))
-    dv.append(dv_end)
+    if dv_end is not None:
+        dv.append(dv_end)
     return dv
 
 
@@ -200,6 +213,7 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     weights = outer_weights(-lam, ddv)
     wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
     pin_blocks_vjp(physical, h, weights, bar)
+    attachment_product_vjp(physical, ddv, -lam, h, bar)
     x_bar += xk_bar
     v_bar += vk_bar
     if not first:   # x_k = x + h (v + dv), v_k = v + dv

@@ -1,0 +1,67 @@
+"""Gradients through attachments (gradients/attachments.py) against central finite differences
+of the forward run, under each integrator with an adjoint: two panels stitched along an edge,
+the second thrown sideways and upwards so that the seam works, by a soft stitch (its stiffness
+and damping parameters too) and by a hard one (projected after every step, the masses' share
+in it included); the soft stitch also as the panels land on a plane (backward Euler's
+contact replay then has the stitch's blocks), where the hard one is refused under
+implicit_euler."""
+import pytest
+
+from springsim.attachments import Attachment
+from springsim.bodies.cloth import Cloth
+from springsim.scene import Scene
+from springsim.springs import SpringParameters
+from springsim.errors import SceneError
+from springsim.gradients import gradient
+from springsim.terrains.plane import Plane
+from test_gradients import STEPS, assert_gradients_match, weighted_squares
+
+SEAM_Z = 0.5   # the second panel's -z edge, on the first's +z edge
+KEYS = ["bodies.0.structural.ks", "bodies.1.shear.kd", "bodies.1.velocity", "gravity",
+        "bodies.1.particle_mass"]
+
+
+def stitched(stiffness=None, damping=0.0):
+    """Two 3 x 3 panels 1 m wide, the second's -z edge bound to the first's +z edge, the first
+    pinned at one corner, the second moving off at (0.4, 0.8, 0.3) m/s."""
+    from springsim.bodies.pins import Region
+    springs = {kind: SpringParameters(300.0, 0.4) for kind in ("structural", "shear", "bend")}
+    first = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned=[0],
+                  self_collision=False, **springs)
+    second = Cloth(particles_per_edge=3, width=1.0, height=1.0, pinned="none",
+                   self_collision=False, position=(0.0, 0.0, 1.0), velocity=(0.4, 0.8, 0.3),
+                   particle_mass=0.8, **springs)
+    seam = Region(min=(-1.0, -0.1, SEAM_Z - 0.01), max=(1.0, 0.1, SEAM_Z + 0.01))
+    stitch = Attachment(body=1, to=0, region=seam, stiffness=stiffness, damping=damping)
+    return Scene(bodies=[first, second], attachments=[stitch], terrains=[])
+
+
+def landing(stiffness=None):
+    """The stitched panels 1 cm above a plane, thrown down onto it at 2 m/s, the second
+    sideways too (the seam works while they land)."""
+    scene = stitched(stiffness=stiffness, damping=0.5 if stiffness else 0.0)
+    scene.bodies[0].pinned = "none"
+    scene.bodies[0].velocity = (0.0, -2.0, 0.0)
+    scene.bodies[1].velocity = (1.5, -2.0, 1.0)
+    scene.terrains = [Plane(point=(0.0, -0.01, 0.0), friction=0.4, restitution=0.3)]
+    return scene
+
+
+SOFT_KEYS = ["attachments.0.stiffness", "attachments.0.damping"]
+SCENES = {"soft": (lambda: stitched(stiffness=60.0, damping=0.5), KEYS + SOFT_KEYS),
+          "hard": (stitched, KEYS),
+          "soft-landing": (lambda: landing(stiffness=60.0),
+                           ["bodies.1.velocity", "gravity", "terrains.0.friction"] + SOFT_KEYS)}
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_attachment_gradients_match_finite_differences(integrator, case):
+    scene_of, names = SCENES[case]
+    assert_gradients_match(scene_of, integrator, names)
+
+
+def test_a_hard_stitch_on_bodies_touching_a_terrain_is_refused_under_implicit_euler():
+    with pytest.raises(SceneError, match="hold bodies that touch a terrain"):
+        gradient(landing(), weighted_squares, ["gravity"], duration=0.1,
+                 integrator="implicit_euler", dt=0.01)
