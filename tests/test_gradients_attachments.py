@@ -65,3 +65,25 @@ def test_a_hard_stitch_on_bodies_touching_a_terrain_is_refused_under_implicit_eu
     with pytest.raises(SceneError, match="hold bodies that touch a terrain"):
         gradient(landing(), weighted_squares, ["gravity"], duration=0.1,
                  integrator="implicit_euler", dt=0.01)
+
+
+def test_fit_recovers_a_stitch(tmp_path, capsys):
+    """`springsim fit --fit attachments.0.stiffness --fit attachments.0.damping`: a take of
+    the soft-stitched panels (60 N/m, 0.5 N s/m), fitted from 25 N/m, gives the stitch back."""
+    import json
+
+    from springsim.cli import main
+    from springsim.scenefile import scene_to_toml
+
+    scene_file = tmp_path / "stitched.toml"
+    scene_file.write_text(scene_to_toml(stitched(stiffness=60.0, damping=0.5)))
+    options = ["--integrator", "implicit_euler", "--dt", "0.01"]
+    take = tmp_path / "take.npz"
+    assert main(["run", str(scene_file), *options, "--duration", "0.5", "--out", str(take),
+                 "--quiet"]) == 0
+    assert main(["fit", str(scene_file), *options, "--observed", str(take), "--fit",
+                 "attachments.0.stiffness", "--fit", "attachments.0.damping", "--set",
+                 "attachments.0.stiffness=25", "--out", str(tmp_path / "fitted.toml")]) == 0
+    fitted = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["fitted"]
+    assert fitted["attachments.0.stiffness"] == pytest.approx(60.0, rel=1e-4)
+    assert fitted["attachments.0.damping"] == pytest.approx(0.5, rel=1e-3)
