@@ -226,7 +226,7 @@ class ImplicitEulerAdjoint(Adjoint):
             if holds(physical):   # the step's end before the hold: its last solve again
                 estimates = self.estimates(physical, h, x, v, None)
                 v_end = v + estimates[-1]
-                x_end, v_end, held = hold(physical, *place(physical, x + h * v_end, v_end))
+                _, _, held = hold(physical, *place(physical, x + h * v_end, v_end))
                 x_bar, v_bar = hold_vjp(physical, held, x_bar, v_bar, bar)
             x_bar, v_bar = self.newton_vjp(physical, h, x, v, end, x_bar, v_bar, bar,
                                            estimates)
