@@ -8,13 +8,16 @@ implicit_contact.py), and with still spheres, bowls and meshes under the explici
 (contact.py). Not yet covered, so refused rather than given a gradient that leaves a force out:
 contact with moving or deforming terrains and with curved ones under implicit_euler, hard
 attachments on bodies that touch a terrain under implicit_euler (adjoints.py refuses them at
-that step), body-body and ball contact (and with them the wind on balls). A terrain the
-adjoint does not follow may be in the scene as long as no particle comes within its contact
-band during the run.
+that step), body-body contact, and balls touching each other or other bodies, and the wind on
+balls. A terrain the adjoint does not follow may be in the scene as long as no particle comes
+within its contact band during the run; balls may be, and touch the terrains the adjoint
+follows (a ball is a particle whose terrain offset is its radius), as long as none comes
+within reach of another ball or particle (``ball_check``).
 """
 import numpy as np
 
 from ..errors import SceneError
+from ..wind import ON
 from .adjoints import ADJOINTS
 
 
@@ -24,9 +27,8 @@ def check_supported(simulation) -> None:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
                          + ", ".join(ADJOINTS))
     arrays = simulation.model.arrays
-    if arrays.balls.shape[0]:
-        raise SceneError("bodies", "balls", "touch by ball contact, which gradients do not "
-                         "follow yet")
+    if arrays.balls.shape[0] and arrays.wind_settings[ON]:
+        raise SceneError("wind", "on", "blows on balls, which gradients do not follow yet")
     for body, self_colliding in enumerate(arrays.body_self_collision):
         if self_colliding:
             raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
@@ -36,6 +38,52 @@ def check_supported(simulation) -> None:
     if len(surfaces) > 1:
         raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
                          "other, and gradients do not follow body-body contact yet")
+
+
+def step_checks(simulation):
+    """The checks of every step's start that the scene needs (``contact_check``,
+    ``ball_check``), as one function ``check(step, (x, v))``; None if it needs none."""
+    checks = [check for check in (contact_check(simulation), ball_check(simulation))
+              if check is not None]
+    if not checks:
+        return None
+
+    def check(step, state):
+        for one in checks:
+            one(step, state)
+    return check
+
+
+def ball_check(simulation):
+    """A function ``check(step, (x, v))`` that refuses a state in which a ball could touch
+    another ball or a particle of another body within the step: closer than the two radii plus
+    what their speeds cover in a step, a tenth of the ball's radius (the forward's search
+    slack) and the longest sheet triangle edge (a ball meets a cloth through its triangles,
+    anywhere between the corners); None without balls."""
+    arrays = simulation.model.arrays
+    balls = arrays.balls.astype(np.int64)
+    if not len(balls):
+        return None
+    h, radius = simulation.dt, arrays.radius
+    sheet = arrays.sheet_triangles.astype(np.int64)
+
+    def check(step, state):
+        x, v = state[0], state[1]
+        speed = np.linalg.norm(v, axis=1)
+        edge = 0.0
+        if len(sheet):
+            corners = x[sheet]
+            edge = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max())
+        for a in balls:
+            reach = (radius[a] + radius + h * (speed[a] + speed) + 0.1 * radius[a] + edge)
+            near = np.linalg.norm(x - x[a], axis=1) < reach
+            near[a] = False
+            if near.any():
+                other = int(np.argmax(near))
+                raise SceneError("bodies", "balls", f"ball particle {int(a)} comes within "
+                                 f"reach of particle {other} at step {step}: gradients do not "
+                                 "follow ball contact yet (balls may touch the terrains only)")
+    return check
 
 
 def contact_check(simulation):

@@ -1,0 +1,62 @@
+"""Gradients with balls (a ball is a particle whose terrain offset is its radius): a ball thrown
+onto a plane and one into a bowl, against central finite differences of the forward run under
+each integrator with an adjoint (restitution, friction, gravity, the ball's mass and velocity);
+balls that come within reach of each other are refused in one line, as the adjoint does not
+follow ball contact yet."""
+import pytest
+
+from springsim.bodies.balls import Ball, Balls
+from springsim.errors import SceneError
+from springsim.gradients import gradient
+from springsim.scene import Scene
+from springsim.terrains.bowl import Bowl
+from springsim.terrains.plane import Plane
+from test_gradients import STEPS, assert_gradients_match, weighted_squares
+
+KEYS = ["terrains.0.restitution", "terrains.0.friction", "gravity",
+        "bodies.0.balls.0.velocity", "bodies.0.balls.0.mass", "drag"]
+
+
+def on_plane():
+    """A ball of radius 0.2 m half a centimetre above a plane, thrown down onto it and
+    sideways."""
+    ball = Ball(position=(0.0, 0.205, 0.0), velocity=(0.8, -2.0, 0.3), radius=0.2, mass=2.0)
+    return Scene(bodies=[Balls(balls=[ball])], drag=0.1,
+                 terrains=[Plane(point=(0.0, 0.0, 0.0), friction=0.3, restitution=0.5)])
+
+
+def in_bowl():
+    """The same ball 1.4 cm from the inside of a bowl of radius 1 m, thrown against it."""
+    ball = Ball(position=(0.58, 0.47, 0.0), velocity=(2.0, -1.0, 0.5), radius=0.2, mass=2.0)
+    return Scene(bodies=[Balls(balls=[ball])], drag=0.1,
+                 terrains=[Bowl(center=(0.0, 1.0, 0.0), radius=1.0, friction=0.3,
+                                restitution=0.5)])
+
+
+SCENES = {"plane": on_plane, "bowl": in_bowl}
+# a bowl under implicit_euler is refused for every body (test_gradients_curved.py)
+CASES = [(integrator, case) for integrator in STEPS for case in SCENES
+         if not (case == "bowl" and integrator == "implicit_euler")]
+
+
+@pytest.mark.parametrize("integrator, case", CASES)
+def test_ball_gradients_match_finite_differences(integrator, case):
+    assert_gradients_match(SCENES[case], integrator, KEYS)
+
+
+def test_balls_that_meet_are_refused():
+    """Two balls rolled into each other: the adjoint does not follow ball contact."""
+    balls = Balls(balls=[Ball(position=(-0.3, 1.0, 0.0), velocity=(2.0, 0.0, 0.0), radius=0.2),
+                         Ball(position=(0.3, 1.0, 0.0), velocity=(-2.0, 0.0, 0.0), radius=0.2)])
+    with pytest.raises(SceneError, match="comes within reach of particle"):
+        gradient(Scene(bodies=[balls], terrains=[]), weighted_squares, ["gravity"],
+                 duration=0.1, integrator="rk4", dt=0.002)
+
+
+def test_wind_on_balls_is_refused():
+    from springsim.wind import Wind
+    scene = on_plane()
+    scene.wind = Wind(velocity=(3.0, 0.0, 0.0))
+    with pytest.raises(SceneError, match="wind = 'on': blows on balls"):
+        gradient(scene, weighted_squares, ["gravity"], duration=0.02, integrator="rk4",
+                 dt=0.002)
