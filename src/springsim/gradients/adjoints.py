@@ -55,8 +55,8 @@ class ExplicitAdjoint(Adjoint):
         x_new, v_new, stages = self.update(physical, h, x, v)
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
         held = None
-        if holds(physical):   # the pins on paths are placed first, at the step's end
-            at_time(physical, h)
+        at_time(physical, h)   # the world where the step ends (_steps.collide)
+        if holds(physical):   # the pins on paths are placed first
             x_new, v_new, held = hold(physical, *place(physical, x_new, v_new))
         if len(physical.friction):
             _, _, found = impacts(physical, x_new, v_new)

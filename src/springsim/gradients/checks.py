@@ -4,9 +4,10 @@ run (``check_contact_free``), each a one-line SceneError.
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
 (pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
-implicit_contact.py), and with still spheres, bowls and meshes under the explicit methods
-(contact.py). Not yet covered, so refused rather than given a gradient that leaves a force out:
-contact with moving or deforming terrains and with curved ones under implicit_euler, hard
+implicit_contact.py), and with spheres, bowls and meshes and with terrains moving rigidly under
+the explicit methods (contact.py). Not yet covered, so refused rather than given a gradient that
+leaves a force out: contact with deforming terrains, and with curved or moving ones under
+implicit_euler, hard
 attachments on bodies that touch a terrain under implicit_euler (adjoints.py refuses them at
 that step), body-body contact, and balls touching each other or other bodies, and the wind on
 balls. A terrain the adjoint does not follow may be in the scene as long as no particle comes
@@ -19,6 +20,7 @@ import numpy as np
 from ..errors import SceneError
 from ..wind import ON
 from .adjoints import ADJOINTS
+from .clock import at_time
 
 
 def check_supported(simulation) -> None:
@@ -40,10 +42,10 @@ def check_supported(simulation) -> None:
                          "other, and gradients do not follow body-body contact yet")
 
 
-def step_checks(simulation):
+def step_checks(simulation, physical=None):
     """The checks of every step's start that the scene needs (``contact_check``,
     ``ball_check``), as one function ``check(step, (x, v))``; None if it needs none."""
-    checks = [check for check in (contact_check(simulation), ball_check(simulation))
+    checks = [check for check in (contact_check(simulation, physical), ball_check(simulation))
               if check is not None]
     if not checks:
         return None
@@ -86,21 +88,26 @@ def ball_check(simulation):
     return check
 
 
-def contact_check(simulation):
+def contact_check(simulation, physical=None):
     """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
-    a terrain's contact band (or would be within the step, as implicit_euler's constraints look
-    ahead); None without terrains. The backward pass calls it on every step's start."""
+    the contact band of a terrain the adjoint does not follow (or would be within the step, as
+    implicit_euler's constraints look ahead); None if it follows them all. The backward pass
+    calls it on every step's start, with ``physical``'s clock there: a terrain that moves
+    rigidly is looked up where it is at the step's start and end; a deforming one where the
+    scene placed it."""
     from ..terrains import Plane
     from .contact import Planes
+    from .terrain_shapes import Moving
 
     model = simulation.model
-    shapes = Planes.of(model).shapes
+    shapes = (Planes.of(model) if physical is None else physical.planes).shapes
     implicit = simulation.integrator.name == "implicit_euler"
-    followed = [shape is not None and (isinstance(terrain, Plane) or not implicit)
-                for terrain, shape in zip(model.terrains, shapes)]
-    covered = ("still planes only under implicit_euler (still spheres, bowls and meshes too "
-               "under the explicit methods)" if implicit
-               else "still planes, spheres, bowls and meshes only")
+    still = [not isinstance(shape, Moving) for shape in shapes]
+    followed = [shape is not None and ((isinstance(terrain, Plane) and fixed) or not implicit)
+                for terrain, shape, fixed in zip(model.terrains, shapes, still)]
+    covered = ("still planes only under implicit_euler (spheres, bowls and meshes, still or "
+               "moving rigidly, too under the explicit methods)" if implicit
+               else "planes, spheres, bowls and meshes, still or moving rigidly, only")
     if all(followed):
         return None
     radii = model.arrays.terrain_offset
@@ -111,8 +118,14 @@ def contact_check(simulation):
         for t, terrain in enumerate(model.terrains):
             if followed[t]:
                 continue
-            phi = terrain.signed_distance(x, radii)
-            reach = phi + h * np.minimum(_normal_speed(terrain, x, v, radii), 0.0)
+            if isinstance(shapes[t], Moving) and physical is not None:
+                at_time(physical, 0.0)
+                phi = shapes[t].distance(x, radii)
+                at_time(physical, h)
+                reach = shapes[t].distance(x + h * v, radii)
+            else:
+                phi = terrain.signed_distance(x, radii)
+                reach = phi + h * np.minimum(_normal_speed(terrain, x, v, radii), 0.0)
             touching = (np.minimum(phi, reach) < model.arrays.terrain_epsilon[t]) & ~model.pinned
             if touching.any():
                 raise SceneError(f"terrains.{t}", type(terrain).__name__,

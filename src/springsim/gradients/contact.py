@@ -17,18 +17,20 @@ restitution); the gradient is that branch's derivative. Where a particle changes
 touches down, leaves, starts or stops sliding, bounces) the motion has a kink or a jump and the
 gradient is the one-sided derivative of the branch the run took: finite, never NaN.
 
-Still planes, spheres, bowls and meshes (terrain_shapes.py): a plane's normal is the same
-everywhere, so the contact depends on positions only through which branch a particle takes; a
-sphere's or a mesh's turns with the position, and its derivative (the curvature) carries the
-normal's cotangent to the positions. Moving and deforming terrains touched during a run are
-refused (gradients/checks.py).
-Backward Euler's contact (implicit_contact.py) follows planes only.
+Planes, spheres, bowls and meshes, still or moving rigidly (terrain_shapes.py): a plane's normal
+is the same everywhere, so the contact depends on positions only through which branch a particle
+takes; a sphere's or a mesh's turns with the position, and its derivative (the curvature) carries
+the normal's cotangent to the positions. On a moving terrain every velocity is relative to its
+surface's, u = c' + w x (x - c), which depends on the position too: the relative velocity's
+cotangent reaches the positions through du/dx = [w]x. Deforming terrains touched during a run
+are refused (gradients/checks.py).
+Backward Euler's contact (implicit_contact.py) follows still planes only.
 """
 from typing import NamedTuple
 
 import numpy as np
 
-from .terrain_shapes import shape_of
+from .terrain_shapes import Moving, shape_of, surface_velocity
 
 
 class Planes(NamedTuple):
@@ -41,10 +43,11 @@ class Planes(NamedTuple):
     offset: np.ndarray      # (P,) m, kept between a particle and a terrain
     is_plane: np.ndarray    # (T,) bool
     resting_speed: np.ndarray   # (T,) m/s, approaches slower than this do not bounce
-    shapes: tuple = ()      # (T,) terrain_shapes' shape of each still terrain followed, or None
+    shapes: tuple = ()      # (T,) terrain_shapes' shape of each terrain followed, or None
 
     @classmethod
-    def of(cls, model) -> "Planes":
+    def of(cls, model, clock=None) -> "Planes":
+        """``clock``: the adjoint's (clock.py), which the moving terrains' shapes read."""
         from ..terrains import Plane
 
         arrays = model.arrays
@@ -52,11 +55,15 @@ class Planes(NamedTuple):
         point, normal = np.full((count, 3), np.nan), np.full((count, 3), np.nan)
         is_plane = np.zeros(count, bool)
         shapes = []
+        clock = np.zeros(2) if clock is None else clock
         for t, terrain in enumerate(model.terrains):
             row = arrays.terrain_parameters[t]
-            still = arrays.terrain_motion[t] < 0 and arrays.terrain_deforming[t] < 0
-            shapes.append(shape_of(terrain, row) if still else None)
-            if isinstance(terrain, Plane):
+            motion, deforming = arrays.terrain_motion[t], arrays.terrain_deforming[t]
+            shape = shape_of(terrain, row) if deforming < 0 else None
+            if shape is not None and motion >= 0:
+                shape = Moving(shape, int(motion), arrays.motion_info, arrays.motion_keys, clock)
+            shapes.append(shape)
+            if isinstance(terrain, Plane) and motion < 0 and deforming < 0:
                 point[t], normal[t], is_plane[t] = row[0:3], row[3:6], True
         g = arrays.gravity
         g_size = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
@@ -91,6 +98,8 @@ def far_from_terrains(physical, h, start, end) -> bool:
     shapes = followed(planes)
     if not shapes:
         return True
+    if any(isinstance(shape, Moving) for _, shape in shapes):
+        return False   # where it is at each stage: the NumPy path, which looks it up there
     (x, v), (x_end, v_end) = start[:2], end[:2]
     speed = max(np.sqrt(np.max(np.einsum("ij,ij->i", v, v))),
                 np.sqrt(np.max(np.einsum("ij,ij->i", v_end, v_end))))
@@ -116,6 +125,7 @@ class Touch(NamedTuple):
     case: np.ndarray     # (K,) STICK, KINETIC or SLOWING (coulomb_friction's branches)
     n: np.ndarray        # (K, 3) the terrain's normal at each
     curvature: np.ndarray | None   # (K, 3, 3) (dn/dx)^T there, None for a plane
+    moving: object       # the terrain's Moving shape (v is relative to its surface), or None
 
 
 def contact_accelerations(physical, x, v, h, a):
@@ -125,16 +135,19 @@ def contact_accelerations(physical, x, v, h, a):
     for t, shape in followed(planes):
         n = shape.normals(x)
         phi = shape.distance(x, planes.offset)
-        a_n, v_n = along(a, n), along(v, n)
+        u = surface_velocity(shape, x)
+        relative = v if u is None else v - u
+        a_n, v_n = along(a, n), along(relative, n)
         reaction = -a_n - np.maximum(v_n, 0.0) / h
         index = np.nonzero(physical.free & (phi < planes.epsilon[t]) & (reaction > 0.0))[0]
         if not len(index):
             continue
-        ai, vi, ni = a[index], v[index], n[index]
+        ai, vi, ni = a[index], relative[index], n[index]
         new, case = touched(ai, vi, ni, physical.friction[t], h)
         a = a.copy()
         a[index] = new
-        touches[t] = Touch(index, ai, vi, case, ni, shape.curvature(x[index]))
+        touches[t] = Touch(index, ai, vi, case, ni, shape.curvature(x[index]),
+                           shape if u is not None else None)
     return a, touches
 
 
@@ -207,6 +220,8 @@ def contact_accelerations_vjp(physical, h, touches, g, x_bar, v_bar, bar):
                           normal_vjp(touch, physical.friction[t], h, gi), x_bar)
         g[touch.index] = a_bar
         np.add.at(v_bar, touch.index, vi_bar)
+        if touch.moving is not None:   # v - u(x)
+            np.add.at(x_bar, touch.index, touch.moving.velocity_vjp(-vi_bar))
         bar.friction[t] += friction_bar
     return g
 
@@ -268,10 +283,12 @@ class Impact(NamedTuple):
     v_n: np.ndarray       # their approach speeds
     lifted: np.ndarray
     v: np.ndarray         # (len(bounced), 3) the bounced particles' velocities before
+                          # (relative to a moving terrain's surface)
     n: np.ndarray         # (P, 3) the terrain's normal at every particle, before lifting
     phi: np.ndarray       # (P,) and the distance
     curvature: object     # shape.curvature, called for the rows that need it
     gradient: object      # shape.gradient (grad phi), likewise
+    moving: object        # the terrain's Moving shape, or None
 
 
 def impacts(physical, x, v):
@@ -281,7 +298,9 @@ def impacts(physical, x, v):
     for t, shape in followed(planes):
         n = shape.normals(x)
         phi = shape.distance(x, planes.offset)
-        v_n = along(v, n)
+        u = surface_velocity(shape, x)
+        relative = v if u is None else v - u
+        v_n = along(relative, n)
         band = physical.free & (phi < planes.epsilon[t])
         bounced = np.nonzero(band & (v_n < 0.0))[0]
         lifted = np.nonzero(band & (phi < 0.0))[0]
@@ -291,7 +310,7 @@ def impacts(physical, x, v):
         fast = -vb > planes.resting_speed[t]
         e = np.where(fast, physical.restitution[t], 0.0)
         bounce = (1.0 + e) * vb
-        before = v[bounced]
+        before = relative[bounced]
         v = v.copy()
         v[bounced] -= bounce[:, None] * n[bounced]
         if len(lifted):
@@ -301,7 +320,8 @@ def impacts(physical, x, v):
             x_before = x
         found[t] = Impact(bounced, fast, vb, lifted, before, n, phi,
                           lambda rows, s=shape, at=x_before: s.curvature(at[rows]),
-                          lambda rows, s=shape, at=x_before: s.gradient(at[rows]))
+                          lambda rows, s=shape, at=x_before: s.gradient(at[rows]),
+                          shape if u is not None else None)
     return x, v, found
 
 
@@ -324,6 +344,7 @@ def impacts_vjp(physical, found, x_bar, v_bar, bar):
             n_bar = -(1.0 + e)[:, None] * (gn[:, None] * impact.v + impact.v_n[:, None]
                                            * v_bar[rows])
             v_bar[rows] -= ((1.0 + e) * gn)[:, None] * n
+            u_bar = ((1.0 + e) * gn)[:, None] * n   # v_n = (v - u(x)) . n on a moving one
         lifted = impact.lifted
         if len(lifted):
             n = impact.n[lifted]
@@ -335,4 +356,6 @@ def impacts_vjp(physical, found, x_bar, v_bar, bar):
             x_bar[lifted] = inward
         if len(rows):
             add_curvature(rows, impact.curvature(rows), n_bar, x_bar)
+            if impact.moving is not None:
+                np.add.at(x_bar, rows, impact.moving.velocity_vjp(u_bar))
     return x_bar, v_bar

@@ -64,17 +64,18 @@ class Physical(NamedTuple):
     def of(cls, model) -> "Physical":
         arrays = model.arrays
         group = arrays.spring_group
+        clock = np.zeros(2)   # the moving terrains' shapes read it (contact.Planes)
         return cls(arrays.group_ks[group].astype(float), arrays.group_kd[group].astype(float),
                    arrays.rest_length.astype(float), model.mass.astype(float),
                    arrays.drag.astype(float), arrays.gravity.astype(float),
                    arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
                    arrays.springs[:, 1].astype(np.int64),
                    arrays.terrain_friction.astype(float),
-                   arrays.terrain_restitution.astype(float), Planes.of(model),
+                   arrays.terrain_restitution.astype(float), Planes.of(model, clock),
                    arrays.wind_settings.astype(float), arrays.wind_keys.astype(float),
                    arrays.wind_modes.astype(float),
                    arrays.wind_triangles.astype(np.int64).reshape(-1, 3),
-                   arrays.wind_weights.astype(float), np.zeros(2),
+                   arrays.wind_weights.astype(float), clock,
                    arrays.pin_particles.astype(np.int64), arrays.pin_motion.astype(np.int64),
                    arrays.pin_placed.astype(float), arrays.pin_stiffness.astype(float),
                    arrays.pin_damping.astype(float), arrays.motion_info, arrays.motion_keys,

@@ -116,9 +116,9 @@ def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars,
             first = ((n - 1) // stride) * stride
             states = stretch(simulation, tape, first)
         start, end = states[n - 1 - first], states[n - first]
+        physical.clock[STEP_START] = tape.start_time + (n - 1) * h
         if check is not None:
             check(n - 1, start)
-        physical.clock[STEP_START] = tape.start_time + (n - 1) * h
         x_bar, v_bar = adjoint.step_vjp(physical, h, start, end, x_bar, v_bar, bar)
     for g in inject.get(0, ()):
         x_bar += g

@@ -4,8 +4,9 @@ curvature, which the gradient of a contact on a curved surface needs: where a pa
 decides which way the surface pushes it).
 
 An open set: a terrain kind joins by a function from the terrain to its shape in SHAPES. A
-terrain without one (one that moves or deforms) is not followed, and touching it is refused
-(checks.py).
+terrain that moves rigidly (motion.py) is its shape where it was placed, ``Moving`` at the pose
+of the force time; a terrain without a shape, or one that deforms, is not followed, and touching
+it is refused (checks.py).
 
 ``curvature`` gives (dn/dx)^T, the transpose that vector-Jacobian products take; for a plane, a
 sphere and a bowl dn/dx is symmetric. ``gradient`` gives grad phi, which is the normal for an
@@ -16,8 +17,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..motion import POSE, pose_into
 from ..terrains import Bowl, MeshTerrain, Plane, Sphere
 from ..terrains.mesh import trilinear as mesh_trilinear
+from .clock import FORCE_TIME
 
 
 class Flat(NamedTuple):
@@ -170,3 +173,57 @@ def shape_of(terrain, row):
     """The shape of a still terrain (``row``: its model.terrain_parameters), or None."""
     make = SHAPES.get(type(terrain))
     return None if make is None else make(terrain, row)
+
+
+class Moving(NamedTuple):
+    """A terrain moving rigidly: ``shape`` where the scene placed it, looked up at the pose its
+    motion (row ``motion`` of the motion tables) has at the force time, read from ``clock`` at
+    every call as world.terrain_at reads the model's: l = R^T (x - c) + pivot, n = R m(l),
+    (dn/dx)^T = R C(l) R^T. Its surface moves at u = c' + w x (x - c)
+    (world.surface_velocity), so du/dx = [w]x."""
+
+    shape: object
+    motion: int
+    motion_info: np.ndarray
+    motion_keys: np.ndarray
+    clock: np.ndarray
+
+    def pose(self):
+        out = np.empty(POSE)
+        pose_into(self.motion_info, self.motion_keys, self.motion, self.clock[FORCE_TIME], out)
+        return out
+
+    def local(self, x):
+        """(the points in the placed frame, R)."""
+        p = self.pose()
+        rotation = p[0:9].reshape(3, 3)
+        return (x - p[9:12]) @ rotation + p[12:15], rotation
+
+    def distance(self, x, offset):
+        return self.shape.distance(self.local(x)[0], offset)
+
+    def normals(self, x):
+        at, rotation = self.local(x)
+        return self.shape.normals(at) @ rotation.T
+
+    def gradient(self, x):
+        at, rotation = self.local(x)
+        return self.shape.gradient(at) @ rotation.T
+
+    def curvature(self, x):
+        at, rotation = self.local(x)
+        inner = self.shape.curvature(at)
+        return None if inner is None else rotation @ inner @ rotation.T
+
+    def velocity(self, x):
+        p = self.pose()
+        return p[15:18] + np.cross(p[18:21], x - p[9:12])
+
+    def velocity_vjp(self, u_bar):
+        """(du/dx)^T u_bar = [w]x^T u_bar = -w x u_bar."""
+        return -np.cross(self.pose()[18:21], u_bar)
+
+
+def surface_velocity(shape, x):
+    """The terrain's surface velocity at each point (K, 3), or None for a still one."""
+    return shape.velocity(x) if isinstance(shape, Moving) else None

@@ -1,0 +1,64 @@
+"""Gradients through contact with terrains that move rigidly (gradients/terrain_shapes.Moving)
+under the explicit methods, against central finite differences of the forward run: a cube
+resting on a platform that slides and turns under it (friction on the velocity relative to the
+surface, the turn carrying the normal), a ball dropped onto the shoulder of a sphere that rises
+and spins (the surface's velocity w x r depends on where the ball touches, and the normal
+turns with it), and the same ball onto a plane that tilts as it rises, on a keyed path."""
+import pytest
+
+from springsim.bodies.balls import Ball, Balls
+from springsim.bodies.cube import Cube
+from springsim.motion import Keyframe, Motion
+from springsim.scene import Scene
+from springsim.terrains.plane import Plane
+from springsim.terrains.sphere import Sphere
+from test_gradients import assert_gradients_match
+
+EXPLICIT = ["symplectic_euler", "rk4"]
+BALL_KEYS = ["terrains.0.restitution", "terrains.0.friction", "gravity",
+             "bodies.0.balls.0.velocity", "drag"]
+
+
+def platform():
+    """The small cube resting in a plane's band, the plane sliding at 1 m/s and turning at
+    2 rad/s about a vertical axis through (0.3, 0, 0.2)."""
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.0, 0.503, 0.0),
+                velocity=(0.0, -0.1, 0.0), pinned=())
+    motion = Motion(velocity=(1.0, 0.0, 0.0), angular_velocity=(0.0, 2.0, 0.0),
+                    pivot=(0.3, 0.0, 0.2))
+    return Scene(bodies=[cube], drag=0.1, terrains=[
+        Plane(point=(0.0, 0.0, 0.0), friction=0.6, restitution=0.3, motion=motion)])
+
+
+def spinning_sphere():
+    """A ball 5 mm above a sphere's shoulder, the sphere rising at 0.5 m/s and spinning at
+    4 rad/s about its centre's z axis."""
+    ball = Ball(position=(0.5, 0.8714, 0.0), velocity=(0.3, -1.5, 0.2), radius=0.2, mass=2.0)
+    motion = Motion(velocity=(0.0, 0.5, 0.0), angular_velocity=(0.0, 0.0, 4.0))
+    return Scene(bodies=[Balls(balls=[ball])], drag=0.1, terrains=[
+        Sphere(center=(0.0, 0.0, 0.0), radius=0.8, friction=0.4, restitution=0.6,
+               motion=motion)])
+
+
+def tilting_plane():
+    """A ball 5 mm above a plane that rises and tilts on a smooth keyed path."""
+    ball = Ball(position=(0.1, 0.205, -0.1), velocity=(0.5, -1.0, 0.0), radius=0.2, mass=2.0)
+    motion = Motion(interpolation="smooth", keyframes=[
+        Keyframe(time=0.0, position=(0.0, 0.0, 0.0)),
+        Keyframe(time=0.05, position=(0.0, 0.03, 0.01), rotation_degrees=4.0,
+                 rotation_axis=(1.0, 0.0, 0.2))])
+    return Scene(bodies=[Balls(balls=[ball])], drag=0.1, terrains=[
+        Plane(point=(0.0, 0.0, 0.0), friction=0.4, restitution=0.6, motion=motion)])
+
+
+SCENES = {"platform": (platform, ["terrains.0.friction", "bodies.0.structural.ks", "gravity",
+                                  "bodies.0.velocity"]),
+          "spinning-sphere": (spinning_sphere, BALL_KEYS),
+          "tilting-plane": (tilting_plane, BALL_KEYS)}
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+@pytest.mark.parametrize("integrator", EXPLICIT)
+def test_moving_terrain_gradients_match_finite_differences(integrator, case):
+    scene_of, names = SCENES[case]
+    assert_gradients_match(scene_of, integrator, names)
