@@ -3,7 +3,8 @@ under the explicit methods, against central finite differences of the forward ru
 resting on a platform that slides and turns under it (friction on the velocity relative to the
 surface, the turn carrying the normal), a ball dropped onto the shoulder of a sphere that rises
 and spins (the surface's velocity w x r depends on where the ball touches, and the normal
-turns with it), and the same ball onto a plane that tilts as it rises, on a keyed path."""
+turns with it), and the same ball onto a plane that tilts as it rises, on a keyed path; and the
+platform far below the cube, where rk4's adjoint takes its kernels."""
 import pytest
 
 from springsim.bodies.balls import Ball, Balls
@@ -51,7 +52,16 @@ def tilting_plane():
         Plane(point=(0.0, 0.0, 0.0), friction=0.4, restitution=0.6, motion=motion)])
 
 
-SCENES = {"platform": (platform, ["terrains.0.friction", "bodies.0.structural.ks", "gravity",
+def far_platform():
+    """The sliding, turning platform 1.5 m below the small cube, which it never reaches: rk4's
+    steps take the kernels (contact.far_from_terrains)."""
+    scene = platform()
+    scene.bodies[0].position = (0.0, 2.0, 0.0)
+    return scene
+
+
+SCENES = {"far-platform": (far_platform, ["bodies.0.structural.ks", "gravity"]),
+          "platform": (platform, ["terrains.0.friction", "bodies.0.structural.ks", "gravity",
                                   "bodies.0.velocity"]),
           "spinning-sphere": (spinning_sphere, BALL_KEYS),
           "tilting-plane": (tilting_plane, BALL_KEYS)}

@@ -30,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .clock import at_time
 from .terrain_shapes import Moving, shape_of, surface_velocity
 
 
@@ -91,21 +92,26 @@ def followed(planes: Planes):
 
 def far_from_terrains(physical, h, start, end) -> bool:
     """Whether no stage of a step can have touched a followed terrain: every free particle
-    starts and ends it farther from each than the band and twice the distance its fastest
-    particle covers in a step (an explicit step's stages stay within h |v| of its start, near
-    enough). The adjoint then skips contact (run_kernels.rk4_step_vjp)."""
+    starts and ends it farther from each (a moving one where it is then) than the band and twice
+    the distance its fastest particle and the terrain's surface there cover in a step (an
+    explicit step's stages stay within h |v| of its start, near enough). The adjoint then skips
+    contact (run_kernels.rk4_step_vjp)."""
     planes = physical.planes
     shapes = followed(planes)
     if not shapes:
         return True
-    if any(isinstance(shape, Moving) for _, shape in shapes):
-        return False   # where it is at each stage: the NumPy path, which looks it up there
     (x, v), (x_end, v_end) = start[:2], end[:2]
     speed = max(np.sqrt(np.max(np.einsum("ij,ij->i", v, v))),
                 np.sqrt(np.max(np.einsum("ij,ij->i", v_end, v_end))))
     for t, shape in shapes:
-        near = np.minimum(shape.distance(x, planes.offset), shape.distance(x_end, planes.offset))
-        if np.any(physical.free & (near < planes.epsilon[t] + 2.0 * h * speed)):
+        at_time(physical, 0.0)   # a moving terrain where it is at the step's start and end
+        near = shape.distance(x, planes.offset)
+        sweep = surface_velocity(shape, x)   # and as far again as its surface moves
+        sweep = 0.0 if sweep is None else float(np.sqrt(np.max(np.einsum("ij,ij->i", sweep,
+                                                                          sweep))))
+        at_time(physical, h)
+        near = np.minimum(near, shape.distance(x_end, planes.offset))
+        if np.any(physical.free & (near < planes.epsilon[t] + 2.0 * h * (speed + sweep))):
             return False
     return True
 
