@@ -5,6 +5,7 @@ surface, the turn carrying the normal), a ball dropped onto the shoulder of a sp
 and spins (the surface's velocity w x r depends on where the ball touches, and the normal
 turns with it), and the same ball onto a plane that tilts as it rises, on a keyed path; and the
 platform far below the cube, where rk4's adjoint takes its kernels."""
+import numpy as np
 import pytest
 
 from springsim.bodies.balls import Ball, Balls
@@ -72,3 +73,26 @@ SCENES = {"far-platform": (far_platform, ["bodies.0.structural.ks", "gravity"]),
 def test_moving_terrain_gradients_match_finite_differences(integrator, case):
     scene_of, names = SCENES[case]
     assert_gradients_match(scene_of, integrator, names)
+
+
+def test_a_deforming_terrain_is_refused_where_it_is(tmp_path):
+    """A plate that a point cache lifts 1.5 m into the small cube within the run is refused: the
+    check looks it up where its animation has it (where the scene placed it, it stays clear)."""
+    from springsim.animation import Animation
+    from springsim.errors import SceneError
+    from springsim.gradients import gradient
+    from springsim.terrains import MeshTerrain
+    from test_deforming_terrains import plate, write_obj, write_pc2
+    from test_gradients import small_scene, weighted_squares
+
+    vertices, triangles = plate()
+    write_obj(tmp_path / "plate.obj", vertices, triangles)
+    frames = vertices[None] + (np.arange(4) * 1.0)[:, None, None] * np.array([0.0, 1.0, 0.0])
+    write_pc2(tmp_path / "plate.pc2", frames, fps=10.0)
+    scene = small_scene()
+    scene.bodies[0].pinned = ()
+    scene.terrains = [MeshTerrain(file=str(tmp_path / "plate.obj"),
+                                  animation=Animation(str(tmp_path / "plate.pc2"), fps=10.0))]
+    with pytest.raises(SceneError, match="terrains.0 = 'MeshTerrain': is touched at step"):
+        gradient(scene, weighted_squares, ["gravity"], duration=0.2, integrator="rk4",
+                 dt=0.002)

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import SceneError
 from ..wind import ON
 from .adjoints import ADJOINTS
-from .clock import at_time
+from .clock import STEP_START, at_time
 
 
 def check_supported(simulation) -> None:
@@ -92,9 +92,9 @@ def contact_check(simulation, physical=None):
     """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
     the contact band of a terrain the adjoint does not follow (or would be within the step, as
     implicit_euler's constraints look ahead); None if it follows them all. The backward pass
-    calls it on every step's start, with ``physical``'s clock there: a terrain that moves
-    rigidly is looked up where it is at the step's start and end; a deforming one where the
-    scene placed it."""
+    calls it on every step's start, with ``physical``'s clock there: a terrain that moves or
+    deforms is looked up where it is at the step's start and end (without ``physical``, where
+    the scene placed it)."""
     from ..terrains import Plane
     from .contact import Planes
     from .terrain_shapes import Moving
@@ -123,6 +123,10 @@ def contact_check(simulation, physical=None):
                 phi = shapes[t].distance(x, radii)
                 at_time(physical, h)
                 reach = shapes[t].distance(x + h * v, radii)
+            elif model.arrays.terrain_deforming[t] >= 0 and physical is not None:
+                now = physical.clock[STEP_START]
+                phi = deformed_distance(terrain, x, radii, now)
+                reach = deformed_distance(terrain, x + h * v, radii, now + h)
             else:
                 phi = terrain.signed_distance(x, radii)
                 reach = phi + h * np.minimum(_normal_speed(terrain, x, v, radii), 0.0)
@@ -133,6 +137,18 @@ def contact_check(simulation, physical=None):
                                  f"{int(np.argmax(touching))}): gradients follow contact with "
                                  + covered)
     return check
+
+
+def deformed_distance(terrain, x, radii, t):
+    """Signed distance (m) from each particle's surface to a deforming mesh terrain where its
+    animation has it at time t (s): libigl's, as MeshTerrain.signed_distance's at time 0."""
+    import igl
+
+    from ..terrains.deforming_mesh import surface_at
+
+    surface = terrain.deforming_surface()
+    return igl.signed_distance(np.asarray(x, float), surface_at(surface, t), surface.triangles,
+                               sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0] - radii
 
 
 def _normal_speed(terrain, x, v, radii):
