@@ -7,13 +7,13 @@ dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or 
 implicit_contact.py), and with spheres, bowls and meshes and with terrains moving rigidly under
 the explicit methods (contact.py). Not yet covered, so refused rather than given a gradient that
 leaves a force out: contact with deforming terrains, and with curved or moving ones under
-implicit_euler, hard
-attachments on bodies that touch a terrain under implicit_euler (adjoints.py refuses them at
-that step), body-body contact, and balls touching each other or other bodies, and the wind on
-balls. A terrain the adjoint does not follow may be in the scene as long as no particle comes
-within its contact band during the run; balls may be, and touch the terrains the adjoint
-follows (a ball is a particle whose terrain offset is its radius), as long as none comes
-within reach of another ball or particle (``ball_check``).
+implicit_euler, hard attachments on bodies that touch a terrain under implicit_euler
+(adjoints.py refuses them at that step), body-body contact, balls touching each other or other
+bodies, and the wind on balls. A terrain the adjoint does not follow may be in the scene as
+long as no particle comes within its contact band during the run (``contact_check``); balls
+may be, and touch the terrains the adjoint follows (a ball is a particle whose terrain offset
+is its radius), as long as none comes within reach of another ball or particle
+(``ball_check``).
 """
 import numpy as np
 
