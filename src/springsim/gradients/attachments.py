@@ -149,10 +149,13 @@ def attachment_diagonal_vjp(physical, h, weights, bar) -> None:
 
 
 class Held(NamedTuple):
-    """What ``hold`` did, for ``hold_vjp``: per projection, in order, the binding and its gap
-    before it moved, for positions and for velocities."""
+    """What ``hold`` did, for ``hold_vjp``: the hard bindings it projected and their u
+    (``hard_shares``), and per projection, in order, the binding and its gap before it moved,
+    for positions and for velocities."""
 
-    x_moves: list   # [(binding, d (3,))]
+    rows: np.ndarray   # (R,)
+    u: np.ndarray      # (R, 4)
+    x_moves: list      # [(binding, d (3,))]
     v_moves: list
 
 
@@ -188,15 +191,15 @@ def hold(physical, x, v):
     """(x, v) with every hard binding held (attachments.hold_attachments), and a Held."""
     rows, u = hard_shares(physical)
     if not len(rows):
-        return x, v, Held([], [])
+        return x, v, Held(rows, u, [], [])
     x, x_moves = project(physical, x, rows, u)
     v, v_moves = project(physical, v, rows, u)
-    return x, v, Held(x_moves, v_moves)
+    return x, v, Held(rows, u, x_moves, v_moves)
 
 
 def hold_vjp(physical, held, x_bar, v_bar, bar):
     """The cotangents before ``hold`` from those after it (and the masses' share in bar)."""
-    rows, u = hard_shares(physical)
+    rows, u = held.rows, held.u
     u_bar = np.zeros_like(u)
     x_bar = project_vjp(physical, rows, u, held.x_moves, x_bar, u_bar)
     v_bar = project_vjp(physical, rows, u, held.v_moves, v_bar, u_bar)
