@@ -51,7 +51,7 @@ def main():
     x = simulation.state.positions
     blocks = np.empty((len(x), 3, 3))
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
-    assemble_diagonal_and_terms(simulation.model.arrays, layout.diagonal, x, 1.0, 1 / 60,
+    assemble_diagonal_and_terms(simulation.model.arrays, layout, x, 1.0, 1 / 60,
                                 1 / 3600, blocks, terms)
     kind, normal = simulation.state.contacts.kind, np.zeros_like(x)
     rng = np.random.default_rng(1)

@@ -97,7 +97,7 @@ def test_coarse_matrix_is_the_galerkin_product_of_the_constrained_matrix():
     count = model.particle_count
     blocks = np.empty((count, 3, 3))
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
-    assemble_diagonal_and_terms(arrays, layout.diagonal, x, 1.0, H, H * H, blocks, terms)
+    assemble_diagonal_and_terms(arrays, layout, x, 1.0, H, H * H, blocks, terms)
     kind = np.where(model.pinned, PINNED, FREE).astype(np.int8)
     normal = np.zeros((count, 3))
     touching = np.arange(count) % 7 == 3

@@ -11,7 +11,7 @@ from springsim.errors import SceneError
 from springsim.export.mdd import encode as encode_mdd
 from springsim.export.pc2 import encode as encode_pc2
 from springsim.scenefile import load_scene
-from springsim.terrains.deforming_mesh import surface_at
+from springsim.terrains.deforming_mesh import LAST_TIME, surface_at
 
 FPS = 24.0
 
@@ -97,6 +97,38 @@ def test_a_cached_rigid_motion_moves_the_cube_as_the_keyframed_motion(platform_f
     # bringing it up to the plate's sideways speed within 0.2 s of the plate's start
     assert ends[0][:, 1].min() == pytest.approx(0.45, abs=0.02)
     assert 0.3 < (ends[0] - start)[:, 0].mean() < 0.375
+
+
+# steps after which the last step's start plus h rounds differently from steps x h (24 x 1/60,
+# 176 x 2e-3), where a step's end taken as its start plus h would need a refit of its own
+@pytest.mark.parametrize("integrator, dt, steps", [("rk4", 2e-3, 176),
+                                                   ("implicit_euler", 1 / 60, 24)])
+def test_one_refit_serves_a_steps_end_and_the_next_start_and_a_resumed_run_is_bit_identical(
+        platform_files, integrator, dt, steps):
+    """The surface refitted for a step's end is at the next step's start time to the last bit
+    (world.step_end), so the next step does not refit it again; and a run resumed from a copy of
+    its state mid-motion, with a fresh model that refits there, ends where the run that never
+    stopped ends, bit for bit."""
+    folder, _, _ = platform_files
+    text = CUBE.format(dt=dt, integrator=integrator) + '[[terrains]]\ntype = "mesh"\n' \
+        'file = "plate.obj"\n[terrains.animation]\nfile = "plate.pc2"\n'
+    (folder / f"resume-{integrator}.toml").write_text(text)
+
+    def simulation():
+        return springsim.Simulation(load_scene(str(folder / f"resume-{integrator}.toml")))
+
+    first = simulation()
+    first.step(steps)   # the plate moving since 0.25 s, the cube riding it
+    assert (steps - 1) * dt + dt != steps * dt
+    arrays = first.model.arrays
+    block = int(arrays.terrain_deforming[0])
+    assert arrays.terrain_data[block + LAST_TIME] == first.state.time
+    resumed = simulation()
+    resumed.state = first.state.copy()
+    for run in (first, resumed):
+        run.advance(0.2)
+    assert np.array_equal(resumed.state.positions, first.state.positions)
+    assert np.array_equal(resumed.state.velocities, first.state.velocities)
 
 
 def sphere_files(folder, radii):

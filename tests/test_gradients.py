@@ -366,7 +366,7 @@ def test_the_rk4_step_adjoint_in_runs_matches_numpy(monkeypatch):
     import springsim
     from springsim.gradients.adjoints import ExplicitAdjoint, RK4Adjoint
     from springsim.gradients.physics import Cotangents, Physical
-    from springsim.gradients.run_kernels import run_layout
+    from springsim.spring_runs import run_layout
 
     monkeypatch.setattr("springsim.spring_runs.MIN_RUN", 100)
     scene = Scene(bodies=[Cube(particles_per_edge=6, edge_length=1.0, position=(0.0, 2.0, 0.0)),

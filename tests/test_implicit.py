@@ -10,6 +10,8 @@ import scipy.sparse.linalg
 from conftest import EARTH_GRAVITY, build_cube_simulation, perturb
 from springsim import SceneError, Simulation
 from springsim.bodies.balls import Ball, Balls
+from springsim.bodies.cloth import Cloth
+from springsim.bodies.cloth_material import ClothMaterial
 from springsim.bodies.cube import Cube
 from springsim.collision.contact_sets.solve import no_contacts
 from springsim.implicit.cg import filtered_cg, search_product
@@ -141,19 +143,32 @@ def test_cg_meets_the_requested_residual_and_agrees_with_a_direct_solve(toleranc
     assert np.linalg.norm(u.ravel()[free] - direct) <= 10 * tolerance * np.linalg.norm(direct)
 
 
-def test_the_fused_search_product_is_the_filtered_product_of_the_assembled_matrix():
+def material_cloth():
+    """A 12 x 12 cloth of a material: its border springs' constants differ from the inner ones',
+    which cuts the force loop's runs (one group each) short."""
+    cloth = Cloth(particles_per_edge=12, width=0.5, height=0.8, pinned="corners",
+                  material=ClothMaterial())
+    return Simulation(Scene(name="material", bodies=[cloth], integrator="implicit_euler",
+                            dt=1 / 60))
+
+
+@pytest.mark.parametrize("made", [lambda: stiff_cube(pinned=(0, 8)), material_cloth],
+                         ids=["cube", "material cloth"])
+def test_the_fused_search_product_is_the_filtered_product_of_the_assembled_matrix(made):
     """cg.search_product makes c = s + beta c and q = S A c from the diagonal blocks and the
     springs' terms in three passes: the same as the full assembled
     matrix (SciPy) times c, filtered, to rounding; and it returns c . q."""
-    simulation = stiff_cube(pinned=(0, 8))
+    simulation = made()
     perturb(simulation, seed=11, squeeze=0.9, jitter=0.05)
     arrays, x = simulation.model.arrays, simulation.positions
     count = simulation.model.particle_count
     layout = build_solve_layout(arrays)
     assert len(layout.runs) > 0   # the fused path
+    # the solve's runs take every spring whatever its constants: a lattice's springs all run
+    assert len(layout.loose_pairs) == 0 and len(layout.runs) <= len(arrays.spring_runs)
     blocks = np.empty((count, 3, 3))
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
-    assemble_diagonal_and_terms(arrays, layout.diagonal, x, 1.0, H, H * H, blocks, terms)
+    assemble_diagonal_and_terms(arrays, layout, x, 1.0, H, H * H, blocks, terms)
     full = build_block_pattern(arrays)
     full_blocks = np.empty((full.block_count, 3, 3))
     assemble_system(arrays, full, x, 1.0, H, H * H, full_blocks)

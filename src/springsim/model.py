@@ -56,11 +56,12 @@ class ModelArrays(NamedTuple):
     pin_placed: np.ndarray       # (Q, 3) m
     pin_stiffness: np.ndarray    # (Q,) N/m, 0 for a hard pin
     pin_damping: np.ndarray      # (Q,) N s/m
-    # [the time the call starts at, the time of the step being taken] (s): written by the
-    # integrators (Integrator.advance, integrators/_steps.drive) and read by the stages, which
-    # move the world to their own time (world.py); work space, like motion_pose, which the
-    # model lends the kernels so that no kernel signature carries the time
-    clock: np.ndarray            # (3,): and the time the world was last moved to
+    # [the time the call starts at, the time of the step (or part of one) being taken, the
+    # time the world was last moved to, the whole step's start, its end, its size] (s): written
+    # by the integrators (Integrator.advance, integrators/_steps.drive, world.start_step) and
+    # read by the stages, which move the world to their own time (world.py); work space, like
+    # motion_pose, which the model lends the kernels so that no kernel signature carries the time
+    clock: np.ndarray            # (6,)
     # Wind (wind.py): settings, velocity keys, gust modes, and the triangles it blows on
     wind_settings: np.ndarray    # (6,)
     wind_keys: np.ndarray        # (K, 4) time, velocity
@@ -197,7 +198,7 @@ def build_model(scene) -> Model:
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
-        clock=np.zeros(3), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
+        clock=np.zeros(6), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets),
         **surface_contact_arrays(scene.bodies, built, offsets, attached["attachment_nodes"]),

@@ -22,6 +22,8 @@ whatever the number of threads, so results are bit-identical for any count. The 
 computed twice are those within the largest offset of a partition's start (N^2 + N + 1 in a
 cube of N per edge): on the 100^3 cube about 10% of them.
 """
+from typing import NamedTuple
+
 import numpy as np
 from numba import prange
 
@@ -71,6 +73,27 @@ def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.nd
     loose = np.r_[loose, order[~member]]
     return {"spring_runs": runs.reshape(-1, 5).astype(np.int64), "run_rest_length": run_rest_length,
             "loose_springs": np.sort(loose).astype(np.uint32)}   # unsigned: no wrap-around checks
+
+
+class RunLayout(NamedTuple):
+    """Springs in runs whatever their parameters: ``runs`` (R, 5) as build_spring_runs gives
+    them (their group column 0), the spring at each entry (-1: a hole) and the springs in no
+    run. For kernels that take each spring's parameters by its number, so that springs of
+    different constants share a run: a cloth's material gives its border springs other
+    constants than its inner ones (and rounding splits those), which cut the model's own runs
+    of one group into short pieces."""
+
+    runs: np.ndarray
+    entry_spring: np.ndarray
+    loose: np.ndarray
+
+
+def run_layout(a: np.ndarray, b: np.ndarray) -> RunLayout:
+    """The runs of springs (a, b), whatever their parameters (one group)."""
+    numbers = np.arange(len(a), dtype=float)   # carried through the runs as their "rest length"
+    runs = build_spring_runs(np.stack([a, b], axis=1), np.zeros(len(a), np.int64), numbers)
+    return RunLayout(runs["spring_runs"], runs["run_rest_length"].astype(np.int64),
+                     runs["loose_springs"].astype(np.int64))
 
 
 @kernel

@@ -108,12 +108,24 @@ def step_time(model):
 
 
 @kernel
+def step_end(model, h):
+    """The time at the end of the step (or part of one) of size h begun at step_time. For a
+    whole step it is the next step's start time itself, as start_step has it: the start plus h
+    rounds differently, and a deforming terrain moved to the step's end would be refitted
+    again for the next start (each refit of the cape's figure costs several milliseconds)."""
+    if model.clock[1] == model.clock[3] and h == model.clock[5]:
+        return model.clock[4]
+    return model.clock[1] + h
+
+
+@kernel
 def start_step(model, x, v, done, h):
     """Set the clock to step ``done`` of this call (step size h), move the world there and put
     the moving pins on their paths. The time is the call's start plus done h: a function of
     the state's time alone."""
     t = model.clock[0] + done * h
-    model.clock[1] = t
+    model.clock[1] = model.clock[3] = t
+    model.clock[4], model.clock[5] = model.clock[0] + (done + 1) * h, h   # step_end
     move_world(model, t)
     place_pins(model, x, v)
 

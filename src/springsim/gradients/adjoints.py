@@ -16,9 +16,10 @@ that pass (attachments.py), the same way.
 import numpy as np
 
 from ..errors import SceneError
+from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
 from .contact import far_from_terrains, impacts, impacts_vjp
-from .run_kernels import ROWS, entry_table, rk4_step_vjp, run_layout
+from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration

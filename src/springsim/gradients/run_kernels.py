@@ -14,35 +14,16 @@ The columns (``cols``, ROWS x P) hold, by rows: positions, velocities, the cotan
 forces, the springs' force, three blocks of scratch and the cotangents of x and v.
 """
 import math
-from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import inline_kernel, kernel
-from ..spring_runs import build_spring_runs
+from ..spring_runs import RunLayout
 from .kernels import add_spring_forces, add_spring_forces_vjp
 
 X, V, G, FORCE, PUSH, DAMP, SHARE, X_BAR, V_BAR = range(0, 27, 3)   # first rows of each block
 ROWS = 27
 KS, KD, REST, KS_BAR, KD_BAR, REST_BAR = range(6)                    # rows of the entry table
-
-
-class RunLayout(NamedTuple):
-    """Springs (a, b) in runs of one offset: ``runs`` (R, 5) as spring_runs.build_spring_runs
-    gives them (first, offset, count, start, group), the spring at each entry (-1: a hole) and
-    the springs in no run."""
-
-    runs: np.ndarray
-    entry_spring: np.ndarray
-    loose: np.ndarray
-
-
-def run_layout(a: np.ndarray, b: np.ndarray) -> RunLayout:
-    """The runs of springs (a, b), whatever their parameters (one group)."""
-    numbers = np.arange(len(a), dtype=float)   # carried through the runs as their "rest length"
-    runs = build_spring_runs(np.stack([a, b], axis=1), np.zeros(len(a), np.int64), numbers)
-    return RunLayout(runs["spring_runs"], runs["run_rest_length"].astype(np.int64),
-                     runs["loose_springs"].astype(np.int64))
 
 
 def entry_table(layout: RunLayout, ks, kd, rest) -> np.ndarray:

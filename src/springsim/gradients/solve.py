@@ -66,7 +66,7 @@ class ForwardSolver:
         from ..attachments import add_attachment_jacobian
         from ..implicit.jacobian import assemble_diagonal_and_terms
 
-        assemble_diagonal_and_terms(self.arrays, self.layout.diagonal, x, 1.0, h, h * h,
+        assemble_diagonal_and_terms(self.arrays, self.layout, x, 1.0, h, h * h,
                                     self.blocks, self.terms)
         add_attachment_jacobian(self.arrays, self.layout.attachment_slots, h, False, v,
                                 self.blocks, self.unused_rhs)

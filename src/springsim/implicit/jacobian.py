@@ -94,37 +94,41 @@ def assemble_system(model, pattern, x, mass_scale, damping_scale, stiffness_scal
 
 
 @kernel
-def assemble_diagonal_and_terms(model, pattern, x, mass_scale, damping_scale, stiffness_scale,
+def assemble_diagonal_and_terms(model, layout, x, mass_scale, damping_scale, stiffness_scale,
                                 blocks, terms):
-    """The matrix of assemble_system, as its diagonal blocks (``pattern`` a
-    ``diagonal_pattern``) and the springs' coefficients in ``terms`` (spring_terms.py), holes
-    of the runs zero."""
+    """The matrix of assemble_system, as its diagonal blocks (``layout.diagonal`` a
+    ``diagonal_pattern``) and the springs' coefficients in ``terms`` (spring_terms.py) laid out
+    as ``layout`` has them (pattern.SolveLayout), holes of the runs zero."""
+    pattern = layout.diagonal
     assemble_mass(model, pattern, mass_scale, damping_scale, blocks)
     runs, run_coefficients, loose_pairs, loose_coefficients, columns = terms
     run_coefficients[:] = 0.0
     for r in range(runs.shape[0]):
-        first, offset, count, start, g = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
-        ks, kd = model.group_ks[g], model.group_kd[g]
+        first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
         for i in range(count):
-            rest = model.run_rest_length[start + i]
-            if rest < 0.0:
+            s = layout.entry_spring[start + i]
+            if s < 0:
                 continue   # a hole
-            a, b = first + i, first + i + offset
-            p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1],
-                                            x[a, 2] - x[b, 2], ks, kd, rest, damping_scale,
-                                            stiffness_scale)
-            run_coefficients[0, start + i], run_coefficients[1, start + i] = p, q
-            run_coefficients[2, start + i], run_coefficients[3, start + i] = l0, l1
-            run_coefficients[4, start + i] = l2
+            set_spring_coefficients(model, s, x, first + i, first + i + offset, damping_scale,
+                                    stiffness_scale, run_coefficients, start + i)
     for k in range(loose_pairs.shape[0]):
-        s = model.loose_springs[k]
-        a, b, g = loose_pairs[k, 0], loose_pairs[k, 1], model.spring_group[s]
-        p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2],
-                                        model.group_ks[g], model.group_kd[g],
-                                        model.rest_length[s], damping_scale, stiffness_scale)
-        loose_coefficients[0, k], loose_coefficients[1, k] = p, q
-        loose_coefficients[2, k], loose_coefficients[3, k], loose_coefficients[4, k] = l0, l1, l2
+        set_spring_coefficients(model, layout.loose_springs[k], x, loose_pairs[k, 0],
+                                loose_pairs[k, 1], damping_scale, stiffness_scale,
+                                loose_coefficients, k)
     add_terms_to_diagonal(pattern, terms, blocks)
+
+
+@inline_kernel
+def set_spring_coefficients(model, s, x, a, b, damping_scale, stiffness_scale, coefficients,
+                            column):
+    """Column ``column`` of ``coefficients`` = spring s's p, q, l (spring_block) at x; a and b
+    its particles."""
+    g = model.spring_group[s]
+    p, q, l0, l1, l2 = spring_block(x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2],
+                                    model.group_ks[g], model.group_kd[g], model.rest_length[s],
+                                    damping_scale, stiffness_scale)
+    coefficients[0, column], coefficients[1, column] = p, q
+    coefficients[2, column], coefficients[3, column], coefficients[4, column] = l0, l1, l2
 
 
 @kernel

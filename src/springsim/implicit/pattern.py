@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..spring_runs import run_layout
 from ..springs import SpringKind
 from .coarse import CoarseSpace, build_coarse_space
 
@@ -79,8 +80,10 @@ class SolveLayout(NamedTuple):
     blocks (the diagonal, and the blocks of the soft attachments), the springs' layout for their
     terms (spring_terms.py), and where each attachment's blocks are."""
     diagonal: BlockPattern
-    runs: np.ndarray          # (R, 5) the model's spring runs (spring_runs.py)
+    runs: np.ndarray          # (R, 5) the springs' runs whatever their constants (spring_runs.py)
     run_entries: int          # places in the runs, holes included
+    entry_spring: np.ndarray  # (E,) int64 the spring at each place of the runs, -1 at a hole
+    loose_springs: np.ndarray  # (L,) int64 the springs in no run
     loose_pairs: np.ndarray   # (L, 2) int64 the particles of each loose spring
     attachment_slots: np.ndarray   # (A, 4, 4) int64: slots of the blocks (i, j) of each
                                    # soft attachment's particles (-1: a hard one, none)
@@ -99,8 +102,12 @@ def build_solve_layout(arrays, spring_kind=None) -> SolveLayout:
         diagonal, slots[soft] = coupled_pattern(count, arrays.attachment_nodes[soft])
     else:   # the plain diagonal, whose product cg.search_product takes with the springs'
         diagonal = diagonal_pattern(count)
-    return SolveLayout(diagonal=diagonal, runs=arrays.spring_runs.astype(np.int64),
-                       run_entries=len(arrays.run_rest_length),
-                       loose_pairs=arrays.springs[arrays.loose_springs].astype(np.int64)
-                       .reshape(-1, 2), attachment_slots=slots,
+    # runs of their own: the force loop's runs keep one group each, which a cloth's material
+    # cuts short, and a solve's products are most of its time (spring_runs.RunLayout)
+    springs = arrays.springs.astype(np.int64).reshape(-1, 2)
+    runs = run_layout(springs[:, 0], springs[:, 1])
+    return SolveLayout(diagonal=diagonal, runs=runs.runs.astype(np.int64),
+                       run_entries=len(runs.entry_spring), entry_spring=runs.entry_spring,
+                       loose_springs=runs.loose, loose_pairs=springs[runs.loose].reshape(-1, 2),
+                       attachment_slots=slots,
                        coarse=build_coarse_space(count, arrays.springs, near))

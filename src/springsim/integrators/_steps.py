@@ -42,7 +42,7 @@ from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
 from ..forces import force_columns, threaded_accelerations
-from ..world import move_world, place_pins, start_step, step_time
+from ..world import move_world, place_pins, start_step, step_end
 
 
 class Motion(NamedTuple):
@@ -173,7 +173,7 @@ def collide(model, x, v, start, pairs, h):
     terrains where they are at the step's end), then body-body contact (balls and surfaces in
     one set, from the step's ``start`` positions and the surface pair list:
     collision/pipeline.py). Returns the pair list for the next step."""
-    move_world(model, step_time(model) + h)
+    move_world(model, step_end(model, h))
     place_pins(model, x, v)   # moving pins exactly on their paths at the step's end
     hold_attachments(model, x, v)   # hard attachments on their triangles (attachments.py)
     resolve_terrain_impacts(model, x, v)

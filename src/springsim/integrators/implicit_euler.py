@@ -56,7 +56,8 @@ from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..state import ContactMemory
 from ..wind import add_wind_with_jacobian
-from ..world import add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_time
+from ..world import (add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_end,
+                     step_time)
 from .base import Integrator, register
 from ._steps import add_scaled, copy_positions, drive
 
@@ -138,7 +139,7 @@ def backward_euler_step(model, state, scratch, h, pairs):
     list at the step's end is returned."""
     work, settings = scratch.work, scratch.settings
     # the constraints use the moving terrains where they are at the step's end (world.py)
-    move_world(model, step_time(model) + h)
+    move_world(model, step_end(model, h))
     aim_pins(model, state.x, state.v, h)   # moving pins: to their paths' points at the end
     contacts, own, pairs = find_step_contacts(model, state, scratch.solve_pairs, work, h, pairs)
     start_estimate(state, work)
@@ -196,7 +197,7 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     step put back inside the friction cone (first iteration only)."""
     x, v, memory = state
     pattern = layout.diagonal
-    assemble_diagonal_and_terms(model, pattern, work.x_k, 1.0, h, h * h, work.blocks, work.terms)
+    assemble_diagonal_and_terms(model, layout, work.x_k, 1.0, h, h * h, work.blocks, work.terms)
     newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
                work.rhs)
     add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)

@@ -18,7 +18,7 @@ x' = x + h v_p stays put (up to 28 mm/s on the jelly cube at rest on the plane).
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..collision.response.terrain import apply_contact_forces
 from ..forces import accelerations, free_accelerations
-from ..world import move_world, step_time
+from ..world import move_world, step_end
 from .base import KernelIntegrator, register
 from ._steps import add_scaled, Motion, drive, two_stage_scratch, threaded, threaded_drive
 
@@ -38,7 +38,7 @@ def predict_reevaluate_step(model, state, scratch, h, pairs):
     accelerations(model, x, v, h, a, columns)
     add_scaled(x_p, x, h, v)
     add_scaled(v_p, v, h, a)
-    move_world(model, step_time(model) + h)   # moving terrains where the prediction is
+    move_world(model, step_end(model, h))   # moving terrains where the prediction is
     reevaluated_accelerations(model, x_p, v_p, v, h, a, columns)
     add_scaled(x, x, h, v_p)
     add_scaled(v, v, h, a)

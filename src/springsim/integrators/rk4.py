@@ -11,7 +11,7 @@ from numba import prange
 
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..forces import accelerations, force_columns
-from ..world import move_world, step_time
+from ..world import move_world, step_end, step_time
 from .base import KernelIntegrator, register
 from ._steps import Motion, drive, threaded, threaded_drive
 
@@ -27,7 +27,7 @@ def rk4_step(model, state, scratch, h, pairs):
     middle_stage(x, v, a, x_k, v_k, dx, dv, h / 2)
     accelerations(model, x_k, v_k, h, a, columns)  # k3
     middle_stage(x, v, a, x_k, v_k, dx, dv, h)
-    move_world(model, step_time(model) + h)
+    move_world(model, step_end(model, h))
     accelerations(model, x_k, v_k, h, a, columns)  # k4
     last_stage(x, v, a, v_k, dx, dv, h)
     return pairs   # the body-body pair list: the post-step pass's to use
