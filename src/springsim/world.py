@@ -112,7 +112,7 @@ def step_end(model, h):
     """The time at the end of the step (or part of one) of size h begun at step_time. For a
     whole step it is the next step's start time itself, as start_step has it: the start plus h
     rounds differently, and a deforming terrain moved to the step's end would be refitted
-    again for the next start (each refit of the cape's figure costs several milliseconds)."""
+    again, at a cost of its own, for the next start."""
     if model.clock[1] == model.clock[3] and h == model.clock[5]:
         return model.clock[4]
     return model.clock[1] + h

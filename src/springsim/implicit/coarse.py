@@ -294,7 +294,7 @@ def band_solve(factor, y):
     """y = (U^T U)^-1 y, U the band Cholesky factor. Both sweeps work on a row of U and the
     stretch of y below it as contiguous views, which the compiler vectorizes; the backward
     sweep's dot product keeps four running sums, since one sum in a fixed order is a chain
-    of dependent additions that cannot (2.5 times faster both, benchmarks/solve_layout.py)."""
+    of dependent additions that cannot be (benchmarks/solve_layout.py times both)."""
     n, width = factor.shape[0], factor.shape[1] - 1
     for j in range(n):   # U^T z = y
         row = factor[j]
