@@ -119,7 +119,7 @@ def main():
             solves(1, factor, z, True)
             new, old = best_of(arguments.repeats, [lambda: solves(LOOPS, factor, y, False),
                                                    lambda: solves(LOOPS, factor, z, True)])
-            y, z = rng.random(n), None
+            y = rng.random(n)
             z = y.copy()
             band_solve(factor, y)
             plain_band_solve(factor, z)
