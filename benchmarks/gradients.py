@@ -94,6 +94,7 @@ def child(duration: float) -> None:
 def parts() -> None:
     import springsim
     from springsim.gradients import kernels, run_kernels
+    from springsim.spring_runs import run_layout
     from springsim.gradients.physics import Cotangents, Physical
 
     scene, options = setup("cube")
@@ -106,7 +107,7 @@ def parts() -> None:
     bar = Cotangents.zeros(p)
     x_bar, v_bar, force = np.zeros_like(x), np.zeros_like(x), np.zeros_like(x)
     work = np.empty((17, len(x), 3))
-    layout = run_kernels.run_layout(p.a, p.b)
+    layout = run_layout(p.a, p.b)
     table = run_kernels.entry_table(layout, p.ks, p.kd, p.rest)
     loose = tuple(values[layout.loose] for values in (p.a, p.b, p.ks, p.kd, p.rest))
     columns = np.empty((run_kernels.ROWS, len(x)))

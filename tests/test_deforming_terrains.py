@@ -182,6 +182,41 @@ file = "ball.pc2"
     assert top == pytest.approx(0.5, abs=0.02)   # it rests on the grown ball
 
 
+@pytest.mark.parametrize("integrator, dt", [("symplectic_euler", 1e-3), ("rk4", 1e-3),
+                                          ("implicit_euler", 1 / 60)])
+def test_a_ball_larger_than_the_lookup_reach_falls_freely_and_lands_on_the_surface(
+        tmp_path, integrator, dt):
+    """A ball of radius 0.2 m (over twice the plate's band-made reach) dropped from 1.5 m above
+    a slowly rising plate: while far from the plate it falls as it does with no terrain, past
+    4 epsilon / h = 2.4 m/s under implicit_euler (a lookup beyond reach answered ``reach``,
+    which the ball's radius turned into contact, so it was pushed up at every step, and which
+    backward Euler's look-ahead read as a floor that held it to 2.4 m/s), then lands and rests
+    on the plate, its centre a radius above it within the contact band, rising with it."""
+    from springsim.bodies.balls import Ball, Balls
+    from springsim.scene import Scene
+    from springsim.terrains import MeshTerrain
+
+    vertices, triangles = plate()
+    write_obj(tmp_path / "plate.obj", vertices, triangles)
+    frames = vertices[None] + (np.arange(3) * 0.01)[:, None, None] * np.array([0.0, 1.0, 0.0])
+    write_pc2(tmp_path / "plate.pc2", frames, fps=1.0)   # up 1 cm/s for 2 s
+    ball = Ball(position=(0.1, 1.5, 0.07), velocity=(0.0, 0.0, 0.0), radius=0.2, mass=1.0)
+    scene = Scene(bodies=[Balls(balls=[ball])], drag=0.0, terrains=[MeshTerrain(
+        file=str(tmp_path / "plate.obj"), restitution=0.0, friction=0.5,
+        animation=Animation(str(tmp_path / "plate.pc2"), fps=1.0))])
+    simulation = springsim.Simulation(scene, integrator=integrator, dt=dt)
+    simulation.advance(0.3)
+    alone = springsim.Simulation(Scene(bodies=scene.bodies, drag=0.0), integrator=integrator,
+                                 dt=dt)
+    alone.advance(0.3)
+    np.testing.assert_allclose(simulation.state.positions, alone.state.positions, atol=1e-12)
+    assert alone.state.positions[0, 1] == pytest.approx(1.5 - 9.81 * 0.3 ** 2 / 2, abs=0.03)
+    simulation.advance(1.6)   # to 1.9 s, the plate still rising
+    gap = simulation.state.positions[0, 1] - 0.2 - 0.01 * simulation.time
+    assert -1e-3 < gap < scene.terrains[0].epsilon + 1e-3   # at rest in the contact band
+    assert simulation.state.velocities[0, 1] == pytest.approx(0.01, abs=5e-3)
+
+
 def test_hard_pins_follow_their_cached_points_to_round_off(tmp_path):
     """Two corners of a cloth pinned to a cache of the cloth's particles that carries it
     sideways and turns it: at every step each pinned particle is where the cache, linear between

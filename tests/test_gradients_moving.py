@@ -75,24 +75,134 @@ def test_moving_terrain_gradients_match_finite_differences(integrator, case):
     assert_gradients_match(scene_of, integrator, names)
 
 
-def test_a_deforming_terrain_is_refused_where_it_is(tmp_path):
-    """A plate that a point cache lifts 1.5 m into the small cube within the run is refused: the
-    check looks it up where its animation has it (where the scene placed it, it stays clear)."""
-    from springsim.animation import Animation
+def test_a_deforming_terrain_is_refused_where_it_is_under_implicit_euler(tmp_path):
+    """A plate that a point cache lifts 1.5 m into the small cube within the run is refused
+    under implicit_euler, whose contact adjoint follows still planes only: the check looks it
+    up where its animation has it (where the scene placed it, it stays clear)."""
     from springsim.errors import SceneError
     from springsim.gradients import gradient
-    from springsim.terrains import MeshTerrain
-    from test_deforming_terrains import plate, write_obj, write_pc2
     from test_gradients import small_scene, weighted_squares
 
-    vertices, triangles = plate()
-    write_obj(tmp_path / "plate.obj", vertices, triangles)
-    frames = vertices[None] + (np.arange(4) * 1.0)[:, None, None] * np.array([0.0, 1.0, 0.0])
-    write_pc2(tmp_path / "plate.pc2", frames, fps=10.0)
     scene = small_scene()
     scene.bodies[0].pinned = ()
-    scene.terrains = [MeshTerrain(file=str(tmp_path / "plate.obj"),
-                                  animation=Animation(str(tmp_path / "plate.pc2"), fps=10.0))]
+    scene.terrains = [deforming_terrain(tmp_path, *plate(), lambda t, p: p + [0.0, 10.0 * t, 0.0],
+                                        frames=4)]
     with pytest.raises(SceneError, match="terrains.0 = 'MeshTerrain': is touched at step"):
-        gradient(scene, weighted_squares, ["gravity"], duration=0.2, integrator="rk4",
-                 dt=0.002)
+        gradient(scene, weighted_squares, ["gravity"], duration=0.2, integrator="implicit_euler",
+                 dt=0.01)
+
+
+def deforming_terrain(folder, vertices, triangles, path, frames=3, fps=10.0, **settings):
+    """A mesh terrain whose point cache has the vertices at ``path(t, vertices)`` for each
+    frame's time t."""
+    from springsim.animation import Animation
+    from springsim.terrains import MeshTerrain
+    from test_deforming_terrains import write_obj, write_pc2
+
+    name = f"deforming{len(list(folder.glob('*.obj')))}"
+    write_obj(folder / f"{name}.obj", vertices, triangles)
+    samples = np.stack([path(k / fps, vertices) for k in range(frames)])
+    write_pc2(folder / f"{name}.pc2", samples, fps=fps)
+    return MeshTerrain(file=str(folder / f"{name}.obj"),
+                       animation=Animation(str(folder / f"{name}.pc2"), fps=fps), **settings)
+
+
+def plate(n=9, size=3.0):
+    from test_deforming_terrains import plate as square
+    return square(n, size)
+
+
+def tent():
+    """Two slopes rising 0.5 m to a ridge along z: the ridge is the closest feature of a
+    point above it (its edge region), whose normal turns with the point."""
+    vertices = np.array([[-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [0.0, 0.5, -1.0], [0.0, 0.5, 1.0],
+                         [1.0, 0.0, -1.0], [1.0, 0.0, 1.0]])
+    return vertices, np.array([[0, 1, 2], [2, 1, 3], [2, 3, 4], [4, 3, 5]])
+
+
+def rising_tilting(t, vertices):
+    """Up at 0.5 m/s, sideways at 0.4 m/s, and tilting: each vertex rises 0.3 m/s more per m
+    of x, so the surface's velocity differs across every triangle."""
+    return vertices + t * np.column_stack([np.full(len(vertices), 0.4),
+                                           0.5 + 0.3 * vertices[:, 0],
+                                           np.zeros(len(vertices))])
+
+
+def twisting_ridge(t, vertices):
+    """Up at 0.2 to 0.8 m/s along z (the far end faster), so the ridge's velocity varies along
+    it."""
+    return vertices + t * np.column_stack([np.zeros(len(vertices)), 0.5 + 0.3 * vertices[:, 2],
+                                           0.1 * vertices[:, 2]])
+
+
+def cube_on_deforming_plate(folder):
+    """The small cube resting in the band of a plate that rises, slides and tilts under it,
+    placed off the plate's vertices and edges (where the closest feature changes)."""
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.1, 0.503, 0.07),
+                velocity=(0.0, -0.1, 0.0), pinned=())
+    return Scene(bodies=[cube], drag=0.1, terrains=[deforming_terrain(
+        folder, *plate(), rising_tilting, friction=0.6, restitution=0.3)])
+
+
+def ball_on_deforming_ridge(folder):
+    """A ball 5 mm above the tent's ridge, which rises faster at one end."""
+    ball = Ball(position=(0.05, 0.705, 0.1), velocity=(0.3, -1.5, 0.2), radius=0.2, mass=2.0)
+    return Scene(bodies=[Balls(balls=[ball])], drag=0.1, terrains=[deforming_terrain(
+        folder, *tent(), twisting_ridge, friction=0.4, restitution=0.6)])
+
+
+DEFORMING = {"plate": (cube_on_deforming_plate, ["terrains.0.friction", "bodies.0.structural.ks",
+                                                  "gravity", "bodies.0.velocity"]),
+             "ridge": (ball_on_deforming_ridge, BALL_KEYS)}
+
+
+@pytest.mark.parametrize("case", list(DEFORMING))
+@pytest.mark.parametrize("integrator", EXPLICIT)
+def test_deforming_terrain_gradients_match_finite_differences(integrator, case, tmp_path):
+    """Contact with a mesh that a point cache deforms (gradients/terrain_shapes.Deforming): on
+    a plate's faces, whose surface velocity varies across each triangle, and on a ridge's edge,
+    whose normal turns with the ball; the terrain's friction or restitution takes part, so the
+    contact happened."""
+    from springsim.gradients import gradient
+    from test_gradients import STEPS, weighted_squares
+
+    make, names = DEFORMING[case]
+    assert_gradients_match(lambda: make(tmp_path), integrator, names)
+    dt = STEPS[integrator]
+    _, grads = gradient(make(tmp_path), weighted_squares, [names[0]], duration=10 * dt,
+                        integrator=integrator, dt=dt, fps=1 / (4 * dt))
+    assert abs(float(np.ravel(grads[names[0]])[0])) > 1e-3
+
+
+@pytest.mark.parametrize("stride_memory", [1 << 30, 1])
+def test_the_adjoint_takes_each_step_at_the_forward_runs_own_time(stride_memory):
+    """The backward pass sets each step's start to the time the forward run had there (its
+    accumulated clock), with every state kept and with checkpoints run again: start + n h
+    rounds otherwise (asserted here), and at a keyframe on a step boundary the two would take
+    the surface's velocity from opposite sides of the kink."""
+    from springsim.gradients.clock import STEP_START
+    from springsim.gradients.physics import Physical
+    from springsim.gradients.tape import backward, record
+    from springsim.simulation import Simulation
+
+    dt, steps = 1 / 600, 40
+    forward = Simulation(platform(), integrator="symplectic_euler", dt=dt)
+    times = []
+    for _ in range(steps):
+        times.append(forward.time)
+        forward.step(1)
+    assert any(t != n * dt for n, t in enumerate(times))
+
+    class Spy:
+        def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+            seen.append(float(physical.clock[STEP_START]))
+            return x_bar, v_bar
+
+    seen = []
+    simulation = Simulation(platform(), integrator="symplectic_euler", dt=dt)
+    _, tape = record(simulation, steps, np.array([steps]), stride_memory)
+    assert (tape.stride > 1) == (stride_memory == 1)
+    physical = Physical.of(simulation.model)
+    backward(simulation, Spy(), physical, tape, np.array([steps]),
+             np.zeros((1, simulation.model.particle_count, 3)))
+    assert seen[::-1] == times

@@ -187,17 +187,19 @@ def build_model(scene) -> Model:
     rest_length = np.linalg.norm(positions[springs[:, 0]] - positions[springs[:, 1]], axis=1)
 
     attached = pack_attachments(getattr(scene, "attachments", ()), built, offsets)
+    terrain_offset = np.concatenate([b.terrain_offsets if b.terrain_offsets is not None
+                                     else radius[start:start + len(b.masses)]
+                                     for b, start in zip(built, offsets)])
     arrays = ModelArrays(
         inv_mass=np.where(pinned, 0.0, 1.0 / mass), radius=radius,
-        terrain_offset=np.concatenate([b.terrain_offsets if b.terrain_offsets is not None
-                                       else radius[start:start + len(b.masses)]
-                                       for b, start in zip(built, offsets)]),
+        terrain_offset=terrain_offset,
         gravity=np.asarray(scene.gravity, float), drag=particle_drag(scene, built),
         springs=np.ascontiguousarray(springs, dtype=np.uint32), rest_length=rest_length,
         spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
-        **pack_terrains(scene.terrains), **pack_world(scene.terrains, built, offsets),
+        **pack_terrains(scene.terrains, float(terrain_offset.max(initial=0.0))),
+        **pack_world(scene.terrains, built, offsets),
         clock=np.zeros(6), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets),

@@ -4,10 +4,10 @@ run (``check_contact_free``), each a one-line SceneError.
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
 (pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
-implicit_contact.py), and with spheres, bowls and meshes and with terrains moving rigidly under
-the explicit methods (contact.py). Not yet covered, so refused rather than given a gradient that
-leaves a force out: contact with deforming terrains, and with curved or moving ones under
-implicit_euler, hard attachments on bodies that touch a terrain under implicit_euler
+implicit_contact.py), and with spheres, bowls and meshes, with terrains moving rigidly and with
+deforming meshes under the explicit methods (contact.py). Not yet covered, so refused rather
+than given a gradient that leaves a force out: contact with curved, moving or deforming
+terrains under implicit_euler, hard attachments on bodies that touch a terrain under implicit_euler
 (adjoints.py refuses them at that step), body-body contact, balls touching each other or other
 bodies, and the wind on balls. A terrain the adjoint does not follow may be in the scene as
 long as no particle comes within its contact band during the run (``contact_check``); balls
@@ -105,9 +105,10 @@ def contact_check(simulation, physical=None):
     still = [not isinstance(shape, Moving) for shape in shapes]
     followed = [shape is not None and ((isinstance(terrain, Plane) and fixed) or not implicit)
                 for terrain, shape, fixed in zip(model.terrains, shapes, still)]
-    covered = ("still planes only under implicit_euler (spheres, bowls and meshes, still or "
-               "moving rigidly, too under the explicit methods)" if implicit
-               else "planes, spheres, bowls and meshes, still or moving rigidly, only")
+    covered = ("still planes only under implicit_euler (spheres, bowls and meshes, still, "
+               "moving rigidly or deforming, too under the explicit methods)" if implicit
+               else "planes, spheres, bowls and meshes, still, moving rigidly or deforming, "
+               "only")
     if all(followed):
         return None
     radii = model.arrays.terrain_offset

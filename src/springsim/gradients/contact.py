@@ -22,8 +22,9 @@ is the same everywhere, so the contact depends on positions only through which b
 takes; a sphere's or a mesh's turns with the position, and its derivative (the curvature) carries
 the normal's cotangent to the positions. On a moving terrain every velocity is relative to its
 surface's, u = c' + w x (x - c), which depends on the position too: the relative velocity's
-cotangent reaches the positions through du/dx = [w]x. Deforming terrains touched during a run
-are refused (gradients/checks.py).
+cotangent reaches the positions through du/dx = [w]x. A deforming mesh's surface moves with its
+point cache: u is its closest point's, interpolated from its corners, and du/dx comes from how
+that point's weights change with the position (terrain_shapes.Deforming).
 Backward Euler's contact (implicit_contact.py) follows still planes only.
 """
 from typing import NamedTuple
@@ -31,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .clock import at_time
-from .terrain_shapes import Moving, shape_of, surface_velocity
+from .terrain_shapes import Deforming, Moving, shape_of, surface_velocity
 
 
 class Planes(NamedTuple):
@@ -60,8 +61,9 @@ class Planes(NamedTuple):
         for t, terrain in enumerate(model.terrains):
             row = arrays.terrain_parameters[t]
             motion, deforming = arrays.terrain_motion[t], arrays.terrain_deforming[t]
-            shape = shape_of(terrain, row) if deforming < 0 else None
-            if shape is not None and motion >= 0:
+            shape = (shape_of(terrain, row) if deforming < 0
+                     else Deforming(terrain.deforming_surface(), clock))
+            if shape is not None and motion >= 0 and deforming < 0:
                 shape = Moving(shape, int(motion), arrays.motion_info, arrays.motion_keys, clock)
             shapes.append(shape)
             if isinstance(terrain, Plane) and motion < 0 and deforming < 0:
@@ -131,7 +133,8 @@ class Touch(NamedTuple):
     case: np.ndarray     # (K,) STICK, KINETIC or SLOWING (coulomb_friction's branches)
     n: np.ndarray        # (K, 3) the terrain's normal at each
     curvature: np.ndarray | None   # (K, 3, 3) (dn/dx)^T there, None for a plane
-    moving: object       # the terrain's Moving shape (v is relative to its surface), or None
+    moving: object       # the terrain's shape if its surface moves (v is relative to it), or None
+    x: np.ndarray        # (K, 3) their positions
 
 
 def contact_accelerations(physical, x, v, h, a):
@@ -153,7 +156,7 @@ def contact_accelerations(physical, x, v, h, a):
         a = a.copy()
         a[index] = new
         touches[t] = Touch(index, ai, vi, case, ni, shape.curvature(x[index]),
-                           shape if u is not None else None)
+                           shape if u is not None else None, x[index])
     return a, touches
 
 
@@ -227,7 +230,7 @@ def contact_accelerations_vjp(physical, h, touches, g, x_bar, v_bar, bar):
         g[touch.index] = a_bar
         np.add.at(v_bar, touch.index, vi_bar)
         if touch.moving is not None:   # v - u(x)
-            np.add.at(x_bar, touch.index, touch.moving.velocity_vjp(-vi_bar))
+            np.add.at(x_bar, touch.index, touch.moving.velocity_vjp(touch.x, -vi_bar))
         bar.friction[t] += friction_bar
     return g
 
@@ -294,7 +297,8 @@ class Impact(NamedTuple):
     phi: np.ndarray       # (P,) and the distance
     curvature: object     # shape.curvature, called for the rows that need it
     gradient: object      # shape.gradient (grad phi), likewise
-    moving: object        # the terrain's Moving shape, or None
+    moving: object        # the terrain's shape if its surface moves, or None
+    x: np.ndarray         # (P, 3) the positions before lifting
 
 
 def impacts(physical, x, v):
@@ -327,7 +331,7 @@ def impacts(physical, x, v):
         found[t] = Impact(bounced, fast, vb, lifted, before, n, phi,
                           lambda rows, s=shape, at=x_before: s.curvature(at[rows]),
                           lambda rows, s=shape, at=x_before: s.gradient(at[rows]),
-                          shape if u is not None else None)
+                          shape if u is not None else None, x_before)
     return x, v, found
 
 
@@ -363,5 +367,5 @@ def impacts_vjp(physical, found, x_bar, v_bar, bar):
         if len(rows):
             add_curvature(rows, impact.curvature(rows), n_bar, x_bar)
             if impact.moving is not None:
-                np.add.at(x_bar, rows, impact.moving.velocity_vjp(u_bar))
+                np.add.at(x_bar, rows, impact.moving.velocity_vjp(impact.x[rows], u_bar))
     return x_bar, v_bar

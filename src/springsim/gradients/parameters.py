@@ -91,7 +91,7 @@ class SceneValue:
         plain = float(value) if value.ndim == 0 else [float(c) for c in value]
         return set_path(scene, self.key.split("."), plain, "", self.key)
 
-    def tangents(self, scene, model):
+    def tangents(self, scene):
         """[(Physical difference, x0 difference, v0 difference) per component], d/d value."""
         base = self.value.ravel()
         out = []
@@ -107,8 +107,9 @@ class SceneValue:
                 except SceneError as error:
                     raise SceneError("wrt", self.key, "cannot be differentiated at "
                                      f"{self.value.tolist()}: {error}") from None
-                check_covered(self.key, model, changed)
                 built.append(changed)
+            # the two fresh models, not the run's, whose kernels have written their work space
+            check_covered(self.key, built[0], built[1])
             span = taken[0] - taken[1]   # the step the values took, rounding included
             plus, minus = Physical.of(built[0]), Physical.of(built[1])
             out.append(tuple((getattr(plus, name) - getattr(minus, name)) / span
@@ -121,7 +122,7 @@ class SceneValue:
         bars = tuple(getattr(result.bar, name) for name in DIFFERENTIABLE) + (result.x0_bar,
                                                                                result.v0_bar)
         grad = [sum(float(np.sum(b * t)) for b, t in zip(bars, tangent))
-                for tangent in self.tangents(scene, model)]
+                for tangent in self.tangents(scene)]
         return float(grad[0]) if self.shape == () else np.array(grad).reshape(self.shape)
 
 
@@ -131,7 +132,7 @@ def check_covered(key, model, changed):
         if field in COVERED or field in WORK_SPACE:
             continue
         old, new = getattr(model.arrays, field), getattr(changed.arrays, field)
-        if np.shape(old) != np.shape(new) or not np.array_equal(old, new):
+        if np.shape(old) != np.shape(new) or not np.array_equal(old, new, equal_nan=True):
             raise SceneError("wrt", key, f"is not differentiable: it changes the model's "
                              f"{field}, which the gradient does not follow")
     if not np.array_equal(model.arrays.springs, changed.arrays.springs) or \

@@ -25,8 +25,8 @@ class Tape:
     steps: int
     stride: int
     states: list          # [(x, v)] per step when stride == 1, else full State every stride steps
+    times: np.ndarray     # (steps,) s, each step's start as the forward run had it
     stored_bytes: int = 0
-    start_time: float = 0.0   # s, the first state's
 
 
 def plan_stride(steps: int, particles: int, memory_limit: int) -> int:
@@ -65,7 +65,7 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
     wanted = {int(s): k for k, s in enumerate(frame_steps)}
     frames = np.empty((len(frame_steps), particles, 3))
     states, stored = [], 0
-    start_time = simulation.state.time
+    times = np.empty(steps)   # the forward's own clock: start + n h rounds otherwise
     for n in range(steps + 1):
         state = simulation.state
         if n in wanted:
@@ -77,9 +77,10 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
             states.append(state.copy())
             stored += particles * 48
         if n < steps:
+            times[n] = state.time
             simulation.step(1)
-    return frames, Tape(steps, stride, states, stored + (stride > 1) * stride * particles * 48,
-                        start_time)
+    return frames, Tape(steps, stride, states, times,
+                        stored + (stride > 1) * stride * particles * 48)
 
 
 def stretch(simulation, tape: Tape, first: int):
@@ -116,7 +117,7 @@ def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars,
             first = ((n - 1) // stride) * stride
             states = stretch(simulation, tape, first)
         start, end = states[n - 1 - first], states[n - first]
-        physical.clock[STEP_START] = tape.start_time + (n - 1) * h
+        physical.clock[STEP_START] = tape.times[n - 1]
         if check is not None:
             check(n - 1, start)
         x_bar, v_bar = adjoint.step_vjp(physical, h, start, end, x_bar, v_bar, bar)

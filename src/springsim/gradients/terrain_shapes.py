@@ -5,8 +5,10 @@ decides which way the surface pushes it).
 
 An open set: a terrain kind joins by a function from the terrain to its shape in SHAPES. A
 terrain that moves rigidly (motion.py) is its shape where it was placed, ``Moving`` at the pose
-of the force time; a terrain without a shape, or one that deforms, is not followed, and touching
-it is refused (checks.py).
+of the force time; a mesh that deforms is ``Deforming``, its surface where its point cache has it
+then; a terrain without a shape is not followed, and touching it is refused (checks.py). A shape
+whose surface moves also gives its velocity at each point and that velocity's vector-Jacobian
+product in the point (``velocity``, ``velocity_vjp``).
 
 ``curvature`` gives (dn/dx)^T, the transpose that vector-Jacobian products take; for a plane, a
 sphere and a bowl dn/dx is symmetric. ``gradient`` gives grad phi, which is the normal for an
@@ -219,11 +221,166 @@ class Moving(NamedTuple):
         p = self.pose()
         return p[15:18] + np.cross(p[18:21], x - p[9:12])
 
-    def velocity_vjp(self, u_bar):
-        """(du/dx)^T u_bar = [w]x^T u_bar = -w x u_bar."""
+    def velocity_vjp(self, x, u_bar):
+        """(du/dx)^T u_bar = [w]x^T u_bar = -w x u_bar, the same at every point x."""
         return -np.cross(self.pose()[18:21], u_bar)
+
+
+class Closest(NamedTuple):
+    """Each point's closest point on a deforming surface, as deformed_distance finds it."""
+
+    corners: np.ndarray     # (K, 3) the closest triangle's vertex numbers
+    weights: np.ndarray     # (K, 3) the closest point's barycentric weights
+    sign: np.ndarray        # (K,) +1 outside, -1 inside (the closest feature's pseudonormal)
+    distance: np.ndarray    # (K,) m, unsigned
+    normal: np.ndarray      # (K, 3) sign (x - closest) / distance
+
+
+class Deforming:
+    """A mesh terrain that deforms (terrains/deforming_mesh.py): its surface where the point
+    cache has it at the force time (``deform``'s interpolation, read from ``clock`` at every
+    call), and each point's closest point on it, whose triangle libigl's tree finds and whose
+    weights the contact code's closest_on_triangle gives, as the kernels' lookup does.
+
+    phi = sign |x - p| and n = sign (x - p) / |x - p|, p the closest point, so grad phi = n and
+    dn/dx = sign (I - n n^T)(I - D) / |x - p|, D the projector onto the closest feature: the
+    face's plane (dn/dx = 0), an edge's line, or nothing at a corner. The surface moves at
+    u = sum_k w_k u_k, its corners' velocities; du/dx = sum_k u_k (grad w_k)^T, the weights'
+    gradients within the feature."""
+
+    def __init__(self, surface, clock):
+        self.surface = surface
+        self.clock = clock
+        self.memo = {}   # the last time's surface and the last points' closest points
+
+    def state(self):
+        """(positions, velocities) (V, 3) at the force time: deforming_mesh.interpolate."""
+        t = float(self.clock[FORCE_TIME])
+        if self.memo.get("time") != t:
+            self.memo.clear()
+            self.memo["time"], self.memo["state"] = t, interpolate(self.surface, t)
+        return self.memo["state"]
+
+    def closest(self, x) -> Closest:
+        import igl
+
+        from ..attachments import closest_points_on
+
+        positions, _ = self.state()
+        key = x.tobytes()
+        if self.memo.get("points") != key:
+            triangles = self.surface.triangles
+            x = np.ascontiguousarray(x, float)
+            signed, row, _, _ = igl.signed_distance(
+                x, positions, triangles, sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)
+            row = np.asarray(row, np.int64)
+            weights, distance = closest_points_on(x, positions[triangles], row)
+            corners = triangles[row]
+            sign = np.where(signed < 0.0, -1.0, 1.0)
+            d = x - np.einsum("kj,kjc->kc", weights, positions[corners])
+            safe = np.where(distance > 1e-12, distance, 1.0)
+            self.memo["points"] = key
+            self.memo["closest"] = Closest(corners, weights, sign, distance,
+                                           sign[:, None] * d / safe[:, None])
+        return self.memo["closest"]
+
+    def distance(self, x, offset):
+        found = self.closest(x)
+        return found.sign * found.distance - offset
+
+    def normals(self, x):
+        return self.closest(x).normal
+
+    def gradient(self, x):
+        return self.normals(x)
+
+    def curvature(self, x):
+        """Zero over a face (exactly, not as the rounding of (I - n n^T) n n^T)."""
+        found = self.closest(x)
+        n = found.normal
+        across = np.eye(3) - n[:, :, None] * n[:, None, :]
+        along = feature_projector(self.state()[0], found)
+        scale = np.where((found.distance > 1e-12) & (found.weights != 0.0).any(axis=1)
+                         & (found.weights == 0.0).any(axis=1),
+                         found.sign / np.where(found.distance > 1e-12, found.distance, 1.0), 0.0)
+        return scale[:, None, None] * np.einsum("kij,kjl->kil", across, np.eye(3) - along)
+
+    def velocity(self, x):
+        found = self.closest(x)
+        return np.einsum("kj,kjc->kc", found.weights, self.state()[1][found.corners])
+
+    def velocity_vjp(self, x, u_bar):
+        """sum_k (u_k . u_bar) grad w_k."""
+        found = self.closest(x)
+        positions, velocities = self.state()
+        share = np.einsum("kjc,kc->kj", velocities[found.corners], u_bar)
+        return np.einsum("kj,kjc->kc", share, weight_gradients(positions, found))
+
+
+def interpolate(surface, t):
+    """The surface's (positions, velocities) at t, as deforming_mesh.interpolate computes them:
+    linear between samples, held outside them."""
+    times, samples = surface.times, surface.samples
+    if len(times) == 1 or not t > times[0]:
+        return samples[0], np.zeros_like(samples[0])
+    if t >= times[-1]:
+        return samples[-1], np.zeros_like(samples[-1])
+    k = int(np.searchsorted(times, t, side="right")) - 1
+    span = times[k + 1] - times[k]
+    w, rate = (t - times[k]) / span, 1.0 / span
+    here, there = samples[k], samples[k + 1]
+    return here + w * (there - here), (there - here) * rate
+
+
+def feature_projector(positions, found: Closest):
+    """(K, 3, 3) the projector onto each closest point's edge line, zero at a corner (and on a
+    face, whose curvature is zero anyway): a feature's weights are the nonzero ones."""
+    corners = positions[found.corners]                          # (K, 3, 3)
+    inside = found.weights != 0.0
+    count = inside.sum(axis=1)
+    out = np.zeros((len(count), 3, 3))
+    edge = count == 2
+    if edge.any():
+        e = edge_vectors(corners[edge], inside[edge])
+        e /= np.linalg.norm(e, axis=1)[:, None]
+        out[edge] = e[:, :, None] * e[:, None, :]
+    return out
+
+
+def edge_vectors(corners, inside):
+    """(K, 3) from the first to the second corner of each point's edge (its nonzero weights)."""
+    order = np.argsort(~inside, axis=1, kind="stable")[:, :2]   # the two corners, in order
+    rows = np.arange(len(corners))
+    return corners[rows, order[:, 1]] - corners[rows, order[:, 0]]
+
+
+def weight_gradients(positions, found: Closest):
+    """(K, 3, 3) grad w_k of each closest point's weights in the point: on a face the
+    barycentric gradients m x (opposite edge) / |2 area| of its projection, on an edge
+    -+e / |e|^2 for its two corners, zero at a corner."""
+    corners = positions[found.corners]
+    inside = found.weights != 0.0
+    count = inside.sum(axis=1)
+    out = np.zeros((len(count), 3, 3))
+    face = count == 3
+    if face.any():
+        c = corners[face]
+        m = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+        size = np.linalg.norm(m, axis=1)[:, None]
+        unit = m / size
+        for k in range(3):
+            opposite = c[:, (k + 2) % 3] - c[:, (k + 1) % 3]
+            out[face, k] = np.cross(unit, opposite) / size
+    edge = np.nonzero(count == 2)[0]
+    if len(edge):
+        e = edge_vectors(corners[edge], inside[edge])
+        e /= np.einsum("kc,kc->k", e, e)[:, None]
+        order = np.argsort(~inside[edge], axis=1, kind="stable")[:, :2]
+        out[edge, order[:, 0]] = -e
+        out[edge, order[:, 1]] = e
+    return out
 
 
 def surface_velocity(shape, x):
     """The terrain's surface velocity at each point (K, 3), or None for a still one."""
-    return shape.velocity(x) if isinstance(shape, Moving) else None
+    return shape.velocity(x) if hasattr(shape, "velocity") else None

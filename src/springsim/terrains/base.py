@@ -119,10 +119,12 @@ def registered_kinds() -> list:
     return KINDS
 
 
-def pack_terrains(terrains) -> dict:
+def pack_terrains(terrains, largest_offset: float = 0.0) -> dict:
     """Arrays the contact kernels read: a kind number, a parameter row and contact settings per
     terrain, the data buffer they share, where a deforming terrain's block starts in it (-1:
-    it keeps its shape) and each terrain's row of the motion table (-1: it stands still)."""
+    it keeps its shape) and each terrain's row of the motion table (-1: it stands still).
+    ``largest_offset``: the most any particle keeps from a terrain (m), which a deforming
+    mesh's lookup must reach beyond its band."""
     count = len(terrains)
     packed = {"terrain_kind": np.zeros(count, np.int64),
               "terrain_parameters": np.zeros((count, PARAMETERS)),
@@ -131,7 +133,7 @@ def pack_terrains(terrains) -> dict:
               "terrain_deforming": np.full(count, -1, np.int64)}
     data, length = [np.zeros(1)], 1   # never empty: one array type whatever the terrains
     for t, terrain in enumerate(terrains):
-        row, own = terrain.pack(length)
+        row, own = terrain.pack(length, largest_offset)
         packed["terrain_kind"][t] = terrain.packed_kind()
         packed["terrain_deforming"][t] = length if terrain.deforms() else -1
         packed["terrain_parameters"][t, :len(row)] = row

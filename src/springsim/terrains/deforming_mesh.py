@@ -8,22 +8,25 @@ velocities interpolated from the cache, the triangles' unit normals, the angle-w
 and edge pseudonormals (Baerentzen and Aanaes), and a uniform grid of cells listing the
 triangles whose box, grown by ``reach``, covers the cell. A point then asks only its own cell:
 every triangle within ``reach`` of it is listed there, so the closest one found is the exact
-closest triangle wherever the distance is below ``reach``; beyond, the point is free. Its
-sign comes from the pseudonormal of the closest feature (face, edge or vertex), which is exact
-for a closed mesh and gives an open one the side its faces' normals point to, as the still
-mesh's libigl distances do. Contact velocity is the closest point's, interpolated from its
-triangle's corners (``deformed_velocity``).
+closest triangle wherever the distance is below ``reach``; beyond, the point is free: the lookup
+answers an infinite distance, as the still dispatcher does for a kind it skips (a finite answer
+with a made-up normal would be, to backward Euler's look-ahead phi + h v_n < epsilon, a surface
+that near, and hold back whatever falls fast). Its sign comes from the pseudonormal of the
+closest feature (face, edge or vertex), which is exact for a closed mesh and gives an open one
+the side its faces' normals point to, as the still mesh's libigl distances do. Contact velocity
+is the closest point's, interpolated from its triangle's corners (``deformed_velocity``).
 
 A lookup skips a listed triangle whose bounding sphere (its centroid and farthest corner,
 refitted with the normals) lies farther than the closest triangle found so far: a cell lists
 every triangle within reach of any of its points, dozens to hundreds where a fast limb makes
 reach large, and most are far from the point asking.
-``reach`` is the larger of 4 contact bands (``epsilon``) and the farthest a vertex moves
-between two samples of the cache: a particle the surface passes within one sample is still
-found. The grid covers every sample's box grown by ``reach``; its cells are at least 2 reach
-and at least the mean edge long, and at most MAX_CELLS of them. The entry list is sized once
-from the union of each triangle's boxes at consecutive samples, which holds every box between
-them (positions move linearly), so refitting never allocates.
+``reach`` is the larger of 4 contact bands (``epsilon``) and the farthest a vertex moves between
+two samples of the cache, plus the largest offset a particle keeps from terrains (a ball's
+radius): a particle the surface passes within one sample is still found, and so is a ball's
+centre, which touches at its radius. The grid covers every sample's box grown by ``reach``; its
+cells are at least 2 reach and at least the mean edge long, and at most MAX_CELLS of them. The
+entry list is sized once from the union of each triangle's boxes at consecutive samples, which
+holds every box between them (positions move linearly), so refitting never allocates.
 
 The data block of one deforming terrain, in the shared terrain_data (offsets from its start,
 ``layout``): a header (vertex, triangle, edge and sample counts, entry capacity, the time last
@@ -288,12 +291,12 @@ def closest_triangle(data, s, x0, x1, x2):
 
 @kernel
 def deformed_distance(row, data, x0, x1, x2):
-    """Signed distance (m) to the surface as last refitted, and its unit normal; ``reach`` and
+    """Signed distance (m) to the surface as last refitted, and its unit normal; infinity and
     straight up where nothing is within reach. row[0]: the block's start in data."""
     s = int(row[0])
     squared, tri, w0, w1, w2 = closest_triangle(data, s, x0, x1, x2)
     if tri < 0:
-        return data[s + REACH], 0.0, 1.0, 0.0
+        return math.inf, 0.0, 1.0, 0.0
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
      edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     p0 = p1 = p2 = 0.0
@@ -358,10 +361,10 @@ class DeformingSurface:
         edges, which = np.unique(pairs, axis=0, return_inverse=True)
         return edges, which.reshape(-1, 3)
 
-    def reach(self) -> float:
+    def reach(self, largest_offset: float = 0.0) -> float:
         moved = np.linalg.norm(np.diff(self.samples, axis=0), axis=2).max() \
             if len(self.samples) > 1 else 0.0
-        return max(BAND_REACH * self.epsilon, float(moved))
+        return max(BAND_REACH * self.epsilon, float(moved)) + largest_offset
 
     def grid(self, reach: float):
         """(origin, cell size, counts) covering every sample's box grown by reach."""
@@ -387,10 +390,11 @@ class DeformingSurface:
                               .astype(np.int64))
         return int(most.sum())
 
-    def block(self, data_start: int) -> tuple[list, np.ndarray]:
-        """(the terrain's parameter row, its data block) (module doc)."""
+    def block(self, data_start: int, largest_offset: float = 0.0) -> tuple[list, np.ndarray]:
+        """(the terrain's parameter row, its data block) (module doc); ``largest_offset``: the
+        most any particle keeps from a terrain (m), a ball's radius."""
         edges, triangle_edges = self.edges()
-        reach = self.reach()
+        reach = self.reach(largest_offset)
         origin, cell, counts = self.grid(reach)
         cells = int(np.prod(counts))
         capacity = self.capacity(origin, cell, counts, reach)

@@ -251,9 +251,9 @@ class MeshTerrain(Contact):
                 - radius
         return self.grid().lookup(x) - radius
 
-    def pack(self, data_start: int):
+    def pack(self, data_start: int, largest_offset: float = 0.0):
         if self.animation is not None:
-            return self.deforming_surface().block(data_start)
+            return self.deforming_surface().block(data_start, largest_offset)
         grid = self.grid()
         return grid.row(data_start), grid.values
 

@@ -41,7 +41,7 @@ class Plane(Contact):
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
         return (x - np.asarray(self.point, float)) @ self.unit_normal() - radius
 
-    def pack(self, data_start: int):
+    def pack(self, data_start: int, largest_offset: float = 0.0):
         return [*np.asarray(self.point, float), *self.unit_normal()], np.empty(0)
 
     def display_mesh(self, near, extent: float):

@@ -61,7 +61,7 @@ class Sphere(Contact):
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
         return np.linalg.norm(x - np.asarray(self.center, float), axis=-1) - self.radius - radius
 
-    def pack(self, data_start: int):
+    def pack(self, data_start: int, largest_offset: float = 0.0):
         return [*np.asarray(self.center, float), float(self.radius)], np.empty(0)
 
     def display_mesh(self, near, extent: float):
