@@ -217,6 +217,34 @@ def test_a_ball_larger_than_the_lookup_reach_falls_freely_and_lands_on_the_surfa
     assert simulation.state.velocities[0, 1] == pytest.approx(0.01, abs=5e-3)
 
 
+@pytest.mark.parametrize("speed, height", [(8.0, 0.2), (16.0, 0.12), (16.0, 0.33)])
+def test_a_cloth_thrown_fast_at_a_deforming_plate_does_not_pass_through(tmp_path, speed, height):
+    """A 10 x 10 cloth thrown down at 8 or 16 m/s (13 and 27 cm a step at 1/60 s, the plate's
+    reach 4 cm) onto a slowly rising plate under implicit_euler: at no step is a particle below
+    the plate. Beyond reach the lookup answers infinity, so the solve's look-ahead asks along
+    the step's path (implicit/constraints.swept_lookup); without it the cloth passed through
+    from these heights."""
+    from springsim.bodies.cloth import Cloth
+    from springsim.scene import Scene
+    from springsim.terrains import MeshTerrain
+
+    vertices, triangles = plate()
+    write_obj(tmp_path / "plate.obj", vertices, triangles)
+    frames = vertices[None] + (np.arange(3) * 0.01)[:, None, None] * np.array([0.0, 1.0, 0.0])
+    write_pc2(tmp_path / "plate.pc2", frames, fps=1.0)   # up 1 cm/s for 2 s
+    cloth = Cloth(particles_per_edge=10, width=1.0, height=1.0, position=(0.13, height, 0.07),
+                  pinned="none", velocity=(0.0, -speed, 0.0))
+    scene = Scene(bodies=[cloth], terrains=[MeshTerrain(
+        file=str(tmp_path / "plate.obj"), animation=Animation(str(tmp_path / "plate.pc2"),
+                                                              fps=1.0))])
+    simulation = springsim.Simulation(scene, integrator="implicit_euler", dt=1 / 60)
+    lowest = np.inf
+    for _ in range(60):
+        simulation.step(1)
+        lowest = min(lowest, float((simulation.positions[:, 1] - 0.01 * simulation.time).min()))
+    assert lowest > -1e-3, f"a particle was {-lowest:.3f} m below the plate"
+
+
 def test_hard_pins_follow_their_cached_points_to_round_off(tmp_path):
     """Two corners of a cloth pinned to a cache of the cloth's particles that carries it
     sideways and turns it: at every step each pinned particle is where the cache, linear between

@@ -51,6 +51,7 @@ from ..world import surface_velocity, terrain_at, terrain_view
 FREE, CONTACT, PINNED = 0, 1, 2
 SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
 FRICTION_SETTLED = 0.02  # relative change of the friction impulses that needs no new solve
+MAX_SWEEP_POINTS = 64    # the most points of a step's path a swept lookup asks (swept_lookup)
 
 
 @kernel
@@ -69,7 +70,9 @@ def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
     normal and the normal velocity; terrain -1 if it reaches none.
 
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
-    start of a step); without, it means ending the step inside (phi + h u_n < 0). ``epsilon``:
+    start of a step); without, it means ending the step inside (phi + h u_n < 0). Beyond a
+    deforming mesh's reach its lookup answers infinity, with no normal to look ahead along: the
+    step's path is asked instead (``swept_lookup``). ``epsilon``:
     the terrains' contact bands; ``radius``: the particle's (model.terrain_offset[i]). Inlined,
     so it takes arrays, not the model: an inline kernel handed the model counts a reference to
     each of its arrays at every call.
@@ -78,6 +81,9 @@ def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
         phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
+        if phi == math.inf:
+            phi, mx, my, mz = swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius,
+                                           2.0 * epsilon[t])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:
@@ -88,6 +94,27 @@ def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
             best, best_phi, best_u_n, earliest = t, phi, u_n, reached
             nx, ny, nz = mx, my, mz
     return best, best_phi, nx, ny, nz, best_u_n
+
+
+@inline_kernel
+def swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius, spacing):
+    """(phi, normal) for particle i beyond a deforming mesh's reach: the first of the points
+    x + s h u along the step (``spacing`` apart, s up to 1) that the lookup finds stands in, with
+    the start's distance along its normal, phi_s - s h u . n; infinity if none. The reach is at
+    least 4 contact bands, so points 2 bands apart cannot all miss a surface the path crosses,
+    and a particle that moves less than that cannot reach the band: it is not asked. Without
+    this a particle faster than reach / h would pass through unseen."""
+    travel = h * math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    if not travel >= spacing:
+        return math.inf, 0.0, 1.0, 0.0
+    count = min(int(math.ceil(travel / spacing)), MAX_SWEEP_POINTS)
+    for k in range(1, count + 1):
+        s = k / count
+        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0] + s * h * u0, x[i, 1] + s * h * u1,
+                                     x[i, 2] + s * h * u2, radius)
+        if phi != math.inf:
+            return phi - s * h * (u0 * mx + u1 * my + u2 * mz), mx, my, mz
+    return math.inf, 0.0, 1.0, 0.0
 
 
 @inline_kernel
