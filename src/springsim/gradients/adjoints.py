@@ -11,13 +11,15 @@ own time there first, as the forward's stages move the world. The explicit metho
 contact (still planes, spheres, bowls and meshes: contact.py) is in their force evaluations
 and in the impact pass after each step (``_steps.collide``), which ``explicit_step`` runs again
 in NumPy from the step's start to know what it did; the hard attachments are held just before
-that pass (attachments.py), the same way.
+that pass (attachments.py), and the body-body contacts answered after it (body_contact.py), the
+same way.
 """
 import numpy as np
 
 from ..errors import SceneError
 from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
+from .body_contact import far_from_bodies, respond, respond_vjp
 from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
@@ -55,17 +57,24 @@ class ExplicitAdjoint(Adjoint):
         x, v = place(physical, *start)
         x_new, v_new, stages = self.update(physical, h, x, v)
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
-        held = None
+        held = found = response = None
         at_time(physical, h)   # the world where the step ends (_steps.collide)
         if holds(physical):   # the pins on paths are placed first
             x_new, v_new, held = hold(physical, *place(physical, x_new, v_new))
         if len(physical.friction):
-            _, _, found = impacts(physical, x_new, v_new)
+            x_new, v_new, found = impacts(physical, x_new, v_new)
+        if physical.bodies.collide:
+            _, _, response = respond(physical, x_new, v_new, x)
+        start_bar = 0.0
+        if response is not None:
+            x_bar, v_bar, start_bar = respond_vjp(physical, response, x_bar, v_bar, bar)
+        if found is not None:
             x_bar, v_bar = impacts_vjp(physical, found, x_bar, v_bar, bar)
         if held is not None:
             x_bar, v_bar = hold_vjp(physical, held, x_bar, v_bar, bar)
         release(physical, x_bar, v_bar)   # the pins on paths were put on them after the update
         x_bar, v_bar = self.update_vjp(physical, h, x, v, stages, x_bar, v_bar, bar)
+        x_bar += start_bar   # the body contacts' stencils read the step's start (their sides)
         release(physical, x_bar, v_bar)   # and before it
         return x_bar, v_bar
 
@@ -123,7 +132,8 @@ class RK4Adjoint(ExplicitAdjoint):
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
         if (blows(physical) or soft(physical).any() or len(physical.attachment_nodes)
-                or not far_from_terrains(physical, h, start, end)):
+                or not far_from_terrains(physical, h, start, end)
+                or not far_from_bodies(physical, h, start, end)):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         at_time(physical, 0.0)
         x, v = place(physical, start[0], start[1])
@@ -159,7 +169,8 @@ class RK4Adjoint(ExplicitAdjoint):
         at_time(physical, h)
         a4, t4 = step_accelerations(physical, x4, v4, h)
         stages = ((x2, v2, t2), (x3, v3, t3), (x4, v4, t4), t1)
-        if not len(physical.friction) and not holds(physical):   # the end state is not needed
+        if not (len(physical.friction) or holds(physical) or physical.bodies.collide):
+            # the end state is not needed
             return None, None, stages
         # the forward's arithmetic order (rk4.first_stage .. last_stage)
         dx = v + 2.0 * v2 + 2.0 * v3

@@ -5,15 +5,16 @@ Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py),
 dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
 (pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
 implicit_contact.py), and with spheres, bowls and meshes, with terrains moving rigidly and with
-deforming meshes under the explicit methods (contact.py). Not yet covered, so refused rather
-than given a gradient that leaves a force out: contact with curved, moving or deforming
-terrains under implicit_euler, hard attachments on bodies that touch a terrain under implicit_euler
-(adjoints.py refuses them at that step), body-body contact, balls touching each other or other
-bodies, and the wind on balls. A terrain the adjoint does not follow may be in the scene as
-long as no particle comes within its contact band during the run (``contact_check``); balls
-may be, and touch the terrains the adjoint follows (a ball is a particle whose terrain offset
-is its radius), as long as none comes within reach of another ball or particle
-(``ball_check``).
+deforming meshes under the explicit methods (contact.py); body-body contact (surfaces of two
+bodies, balls with balls and particles) under the explicit methods (body_contact.py). Not yet
+covered, so refused rather than given a gradient that leaves a force out: contact with curved,
+moving or deforming terrains under implicit_euler, hard attachments on bodies that touch a
+terrain under implicit_euler (adjoints.py refuses them at that step), body-body and ball
+contact under implicit_euler, self contact, and the wind on balls. A terrain the adjoint does
+not follow may be in the scene as long as no particle comes within its contact band during the
+run (``contact_check``); under implicit_euler balls may be, and touch the terrains the adjoint
+follows (a ball is a particle whose terrain offset is its radius), as long as none comes within
+reach of another ball or particle (``ball_check``).
 """
 import numpy as np
 
@@ -37,9 +38,10 @@ def check_supported(simulation) -> None:
                              "self contact yet: set it to false")
     surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
         arrays.surface_points) else []
-    if len(surfaces) > 1:
+    if len(surfaces) > 1 and name == "implicit_euler":
         raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
-                         "other, and gradients do not follow body-body contact yet")
+                         "other, and gradients follow body-body contact under the explicit "
+                         "methods only (" + ", ".join(sorted(set(ADJOINTS) - {name})) + ")")
 
 
 def step_checks(simulation, physical=None):
@@ -61,11 +63,12 @@ def ball_check(simulation):
     another ball or a particle of another body within the step: closer than the two radii plus
     what their speeds cover in a step, a tenth of the ball's radius (the forward's search
     slack) and the longest sheet triangle edge (a ball meets a cloth through its triangles,
-    anywhere between the corners); None without balls."""
+    anywhere between the corners); None without balls, or under the explicit methods, whose
+    ball contacts the adjoint follows."""
     arrays = simulation.model.arrays
     balls = arrays.balls.astype(np.int64)
-    if not len(balls):
-        return None
+    if not len(balls) or simulation.integrator.name != "implicit_euler":
+        return None   # the explicit methods' ball contacts are followed (body_contact.py)
     h, radius = simulation.dt, arrays.radius
     sheet = arrays.sheet_triangles.astype(np.int64)
 
@@ -84,7 +87,8 @@ def ball_check(simulation):
                 other = int(np.argmax(near))
                 raise SceneError("bodies", "balls", f"ball particle {int(a)} comes within "
                                  f"reach of particle {other} at step {step}: gradients do not "
-                                 "follow ball contact yet (balls may touch the terrains only)")
+                                 "follow ball contact under implicit_euler yet (balls may "
+                                 "touch the terrains only; the explicit methods follow it)")
     return check
 
 

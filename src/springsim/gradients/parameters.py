@@ -37,14 +37,16 @@ from .physics import Physical
 COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_ks", "group_kd",
            "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
            "terrain_restitution", "wind_settings", "wind_keys", "wind_modes", "pin_stiffness",
-           "pin_damping", "attachment_stiffness", "attachment_damping"}
+           "pin_damping", "attachment_stiffness", "attachment_damping", "body_friction",
+           "body_restitution"}
 # The model's work space, which the kernels write while they run (model.py): not a parameter
 WORK_SPACE = {"clock", "motion_pose"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
 # Physical's fields with a cotangent (physics.Cotangents), which a SceneValue's tangents cover
 DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution",
                   "wind_settings", "wind_keys", "wind_modes", "pin_stiffness", "pin_damping",
-                  "attachment_stiffness", "attachment_damping")
+                  "attachment_stiffness", "attachment_damping", "body_friction",
+                  "body_restitution")
 
 
 def parameter(scene, name):

@@ -22,6 +22,7 @@ import numpy as np
 
 from . import kernels
 from .attachments import attachment_forces, attachment_forces_vjp
+from .body_contact import NO_BODIES, Bodies
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
 from .pins import pin_forces, pin_forces_vjp
 from .wind import wind_forces, wind_forces_vjp
@@ -59,6 +60,7 @@ class Physical(NamedTuple):
     attachment_weights: np.ndarray    # (A, 4) and weights, summing to zero
     attachment_stiffness: np.ndarray  # (A,) N/m, 0 for a hard binding
     attachment_damping: np.ndarray    # (A,) N s/m
+    bodies: Bodies = NO_BODIES        # the contact arrays of body-body contact (body_contact.py)
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -82,7 +84,17 @@ class Physical(NamedTuple):
                    arrays.attachment_nodes.astype(np.int64),
                    arrays.attachment_weights.astype(float),
                    arrays.attachment_stiffness.astype(float),
-                   arrays.attachment_damping.astype(float))
+                   arrays.attachment_damping.astype(float), Bodies.of(arrays))
+
+    @property
+    def body_friction(self) -> np.ndarray:
+        """(B,) each contact body's kinetic Coulomb coefficient against other surfaces."""
+        return self.bodies.friction
+
+    @property
+    def body_restitution(self) -> np.ndarray:
+        """(B,) and its restitution."""
+        return self.bodies.restitution
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -114,6 +126,8 @@ class Cotangents:
     pin_damping: np.ndarray
     attachment_stiffness: np.ndarray
     attachment_damping: np.ndarray
+    body_friction: np.ndarray
+    body_restitution: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":

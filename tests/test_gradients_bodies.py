@@ -1,0 +1,129 @@
+"""Gradients through body-body contact under the explicit methods (gradients/body_contact.py),
+against central finite differences of the forward run: a cube dropped onto another and sliding
+on it (point-triangle contacts above the faces, edge-edge contacts, Coulomb friction that
+sticks and slides, the stuck contacts' sliding taken back), a cube overhanging another's
+corner (every closest-point region of a point against a triangle), both for the bodies' contact
+friction and restitution among other keys, and two balls thrown onto a cube and into each
+other; and two cubes far apart, where rk4's adjoint takes its kernels.
+Under implicit_euler, body-body contact is refused in one line."""
+import numpy as np
+import pytest
+
+from springsim.bodies.balls import Ball, Balls
+from springsim.bodies.cube import Cube
+from springsim.errors import SceneError
+from springsim.gradients import gradient
+from springsim.gradients import body_contact
+from springsim.scene import Scene
+from test_gradients import STEPS, assert_gradients_match, weighted_squares
+
+EXPLICIT = ["symplectic_euler", "rk4"]
+CUBE_KEYS = ["bodies.1.velocity", "bodies.0.structural.ks", "gravity", "bodies.1.particle_mass",
+             "drag", "bodies.0.friction", "bodies.1.friction", "bodies.0.restitution",
+             "bodies.1.restitution"]
+
+
+def lower_cube():
+    """A cube whose contact keys differ from the defaults (restitution 0 is at the end of its
+    range, where a central difference cannot be taken)."""
+    return Cube(particles_per_edge=3, edge_length=1.0, position=(0.0, 0.5, 0.0), pinned=(),
+                friction=0.3, static_friction=0.45, restitution=0.3)
+
+
+def stacked():
+    """A cube 5.5 mm above another (the contact thickness is 5 cm), thrown down and sideways
+    onto it, slightly turned, while the lower one rises."""
+    lower = lower_cube()
+    lower.velocity = (0.0, 0.2, 0.0)
+    upper = Cube(particles_per_edge=3, edge_length=1.0, position=(0.3, 1.555, 0.2),
+                 velocity=(0.4, -1.0, 0.1), rotation_degrees=3.0,
+                 rotation_axis=(1.0, 0.0, 0.5), pinned=(), restitution=0.2)
+    return Scene(bodies=[lower, upper], terrains=[], drag=0.1)
+
+
+def overhang():
+    """The upper cube over the lower one's corner, 2 cm beyond its edges: its particles meet
+    the lower top's corners and edges, and the lower's its faces' edges."""
+    upper = Cube(particles_per_edge=3, edge_length=1.0, position=(0.52, 1.548, 0.51),
+                 velocity=(0.1, -0.4, 0.05), rotation_degrees=2.0,
+                 rotation_axis=(0.3, 0.0, 1.0), pinned=(), restitution=0.2)
+    return Scene(bodies=[lower_cube(), upper], terrains=[], drag=0.1)
+
+
+def balls():
+    """A ball 1 mm above the cube's top middle particle thrown down onto it, and a smaller one
+    thrown into the first."""
+    one = Ball(position=(0.01, 1.201, 0.02), velocity=(0.3, -1.0, 0.0), radius=0.2, mass=2.0)
+    two = Ball(position=(0.35, 1.29, 0.06), velocity=(-0.6, -0.5, 0.0), radius=0.15, mass=1.0)
+    return Scene(bodies=[lower_cube(), Balls(balls=[one, two])], terrains=[], drag=0.1)
+
+
+def apart():
+    """The stacked cubes 3 m apart: they never touch."""
+    scene = stacked()
+    scene.bodies[1].position = (3.3, 1.555, 0.2)
+    return scene
+
+
+SCENES = {"stacked": (stacked, CUBE_KEYS), "overhang": (overhang, CUBE_KEYS),
+          "balls": (balls, ["bodies.1.balls.0.velocity", "bodies.1.balls.1.mass",
+                            "bodies.0.structural.ks", "gravity", "drag"]),
+          "apart": (apart, ["bodies.1.velocity", "bodies.0.structural.ks"])}
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+@pytest.mark.parametrize("integrator", EXPLICIT)
+def test_body_contact_gradients_match_finite_differences(integrator, case):
+    scene_of, names = SCENES[case]
+    assert_gradients_match(scene_of, integrator, names)
+
+
+@pytest.mark.parametrize("case, kinds", [("stacked", {"face", "edge-edge", "stick", "slide"}),
+                                         ("overhang", {"face", "edge", "corner"}),
+                                         ("balls", {"ball-point", "ball-ball"})])
+def test_the_cases_meet_the_contacts_they_are_for(monkeypatch, case, kinds):
+    """The scenes above do reach what they are meant to check: contacts of each kind and each
+    branch, taken by the adjoint (else a finite-difference match would prove nothing)."""
+    seen = set()
+    respond = body_contact.respond
+
+    def spy(physical, x, v, start):
+        out = respond(physical, x, v, start)
+        if out[2] is not None:
+            contacts, passes = out[2].contacts, out[2].passes
+            geometry = contacts.geometry
+            point = geometry.kind == body_contact.POINT
+            seen.update({"face"} if (point & geometry.face).any() else set())
+            seen.update({"edge"} if np.isin(geometry.region[point], (2, 4, 5)).any() else set())
+            seen.update({"corner"} if np.isin(geometry.region[point], (0, 1, 3)).any()
+                        else set())
+            seen.update({"edge-edge"} if (geometry.kind == body_contact.EDGE).any() else set())
+            ball = geometry.kind == body_contact.BALL
+            partner_is_ball = physical.bodies.ball_slot[contacts.nodes[:, 1]] >= 0
+            seen.update({"ball-ball"} if (ball & partner_is_ball).any() else set())
+            seen.update({"ball-point"} if (ball & ~partner_is_ball).any() else set())
+            seen.update({"stick"} if any((p.active & p.stuck).any() for p in passes) else set())
+            seen.update({"slide"} if any((p.active & ~p.stuck).any() for p in passes)
+                        else set())
+        return out
+
+    monkeypatch.setattr("springsim.gradients.adjoints.respond", spy)
+    gradient(SCENES[case][0](), weighted_squares, ["gravity"], duration=10 * STEPS["rk4"],
+             integrator="rk4", dt=STEPS["rk4"])
+    assert kinds <= seen
+
+
+def test_cubes_apart_take_the_kernels_under_rk4(monkeypatch):
+    """Far apart, no step goes through the NumPy contact replay (far_from_bodies)."""
+    def fail(*args):
+        raise AssertionError("replayed a step of cubes that never touch")
+
+    monkeypatch.setattr("springsim.gradients.adjoints.respond", fail)
+    gradient(apart(), weighted_squares, ["gravity"], duration=10 * STEPS["rk4"],
+             integrator="rk4", dt=STEPS["rk4"])
+
+
+def test_body_contact_is_refused_under_implicit_euler():
+    with pytest.raises(SceneError, match="2 bodies with surfaces.*explicit methods only"):
+        gradient(stacked(), weighted_squares, ["gravity"], duration=0.02,
+                 integrator="implicit_euler", dt=0.01)
