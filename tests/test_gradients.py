@@ -293,8 +293,8 @@ def test_implicit_gradient_is_of_what_was_computed(scene_of):
 
 
 def test_kernels_match_their_numpy_references():
-    """gradients/kernels.py against physics.py's NumPy VJPs, on random springs: some stretched,
-    some compressed (the clamped stiffness), one of zero length."""
+    """gradients/kernels.py against physics.py's NumPy forces and VJPs, on random springs: some
+    stretched, some compressed (the clamped stiffness), one of zero length."""
     from springsim.gradients import physics
     from springsim.gradients.contact import Planes
     rng = np.random.default_rng(3)
@@ -336,6 +336,9 @@ def test_kernels_match_their_numpy_references():
             np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(physics.stiffness_product(physical, x, u),
                                physics.reference_stiffness_product(physical, x, u),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(physics.spring_forces(physical, x, v),
+                               physics.reference_spring_forces(physical, x, v),
                                rtol=1e-12, atol=1e-12)
 
 

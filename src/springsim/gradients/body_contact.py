@@ -27,7 +27,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..collision.broad_phase.balls import find_contacts
+from ..collision.broad_phase.surfaces import surface_pairs
 from ..collision.contact_sets import BALL_PASSES, CORRECTION, PASSES
+from ..collision.pair_lists.solve_pairs import NO_SELF_CONTACT
 
 STEP = 1e-30    # the complex step: its square and products vanish beside any coordinate
 
@@ -50,6 +52,7 @@ class Bodies(NamedTuple):
     particle_restitution: np.ndarray
     particle_friction: np.ndarray
     correction: np.ndarray
+    arrays: object = None   # the model's arrays, which the forward's broad phase searches
 
     @classmethod
     def of(cls, arrays) -> "Bodies":
@@ -63,7 +66,7 @@ class Bodies(NamedTuple):
                   ("ball_restitution", "particle_restitution", "particle_friction",
                    "position_correction")]
         ints[2], ints[3] = ints[2].reshape(-1, 3), ints[3].reshape(-1, 2)
-        return cls(*ints, *floats, *balls, *tables)
+        return cls(*ints, *floats, *balls, *tables, arrays)
 
     @property
     def collide(self) -> bool:
@@ -234,7 +237,9 @@ def touching(physical, x, start) -> Contacts:
     """The touching stencils at x (``start``: the step's start positions), surfaces first
     (point-triangle, edge-edge), then balls, as contact_sets.after_step.touching_contacts."""
     bodies = physical.bodies
-    found = [point_contacts(bodies, x, start), edge_contacts(bodies, x, start),
+    points, edges = (near_pairs(bodies, x, float(bodies.thickness.max()))   # within 2 rest
+                     if len(bodies.triangles) else (None, None))
+    found = [point_contacts(bodies, x, start, points), edge_contacts(bodies, x, start, edges),
              ball_contacts(bodies, x)]
     return Contacts(*(np.concatenate([part[i] for part in found]) for i in range(5)),
                     Geometry(*(np.concatenate([part[5][i] for part in found])
@@ -257,38 +262,23 @@ def empty_part():
                                np.empty(0), np.empty(0), np.empty((0, 2), np.int64)))
 
 
-def candidate_pairs(first_boxes, second_boxes, first_body, second_body, reach):
-    """(i, j) of boxes (low (N, 3), high (N, 3)) of different bodies within ``reach`` (per
-    pair, from the bodies) of each other, in chunks so that no array grows past a few
-    million entries."""
-    found_i, found_j = [], []
-    chunk = max(1, 2_000_000 // max(1, len(second_body)))
-    for begin in range(0, len(first_body), chunk):
-        rows = slice(begin, begin + chunk)
-        gap = reach(first_body[rows, None], second_body[None, :])
-        near = first_body[rows, None] != second_body[None, :]
-        for axis in range(3):
-            near &= (first_boxes[0][rows, None, axis] - gap < second_boxes[1][None, :, axis])
-            near &= (second_boxes[0][None, :, axis] - gap < first_boxes[1][rows, None, axis])
-        i, j = np.nonzero(near)
-        found_i.append(i + begin)
-        found_j.append(j)
-    return np.concatenate(found_i), np.concatenate(found_j)
+def near_pairs(bodies, x, beyond):
+    """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge rows,
+    lower first)) of two bodies closer than their rest distance plus ``beyond`` (m): the
+    forward's own broad phase (collision/broad_phase/surfaces.py), searched afresh. A body's
+    own pairs are left out (checks.py refuses self contact)."""
+    return surface_pairs(bodies.arrays, np.ascontiguousarray(x), beyond, NO_SELF_CONTACT)
 
 
-def point_contacts(bodies, x, start):
-    """narrow_phase.after_step.point_triangle_contact for every point and triangle of two
-    bodies."""
-    if not len(bodies.triangles):
+def point_contacts(bodies, x, start, pairs):
+    """narrow_phase.after_step.point_triangle_contact for the (point, triangle) ``pairs`` of
+    two bodies (near_pairs)."""
+    if pairs is None:
         return empty_part()
-    corners = x[bodies.triangles]
-    point_x = x[bodies.points]
     body, thickness = bodies.body, bodies.thickness
     triangle_body = body[bodies.triangles[:, 0]]
-    p, t = candidate_pairs((point_x, point_x), (corners.min(axis=1), corners.max(axis=1)),
-                           body[bodies.points], triangle_body,
-                           lambda u, w: thickness[u] + thickness[w])
-    points, triangles = bodies.points[p], bodies.triangles[t]
+    points, t = pairs[:, 0], pairs[:, 1]
+    triangles = bodies.triangles[t]
     rest = 0.5 * (thickness[body[points]] + thickness[triangle_body[t]])
     x4 = x[np.column_stack([points, triangles])]
     w, region = closest_weights(x4[:, 0], x4[:, 1], x4[:, 2], x4[:, 3])
@@ -310,19 +300,15 @@ def point_contacts(bodies, x, start):
     return nodes, weights[keep], normal[keep], rest[keep] - gap[keep], params, geometry
 
 
-def edge_contacts(bodies, x, start):
-    """narrow_phase.after_step.edge_edge_contact for every two edges of two bodies (the lower
-    row first, as the broad phase lists them)."""
+def edge_contacts(bodies, x, start, pairs):
+    """narrow_phase.after_step.edge_edge_contact for the edge ``pairs`` of two bodies (the
+    lower row first, as the broad phase lists them: near_pairs)."""
     edges = bodies.edges
-    if not len(edges):
+    if pairs is None or not len(edges):
         return empty_part()
-    ends = x[edges]
     edge_body = bodies.body[edges[:, 0]]
     thickness = bodies.thickness
-    e, f = candidate_pairs((ends.min(axis=1), ends.max(axis=1)),
-                           (ends.min(axis=1), ends.max(axis=1)), edge_body, edge_body,
-                           lambda u, w: 0.5 * (thickness[u] + thickness[w]))
-    e, f = e[e < f], f[e < f]
+    e, f = pairs[:, 0], pairs[:, 1]
     nodes = np.column_stack([edges[e], edges[f]])
     x4 = x[nodes]
     a, b, c, q = x4[:, 0], x4[:, 1], x4[:, 2], x4[:, 3]
@@ -330,17 +316,17 @@ def edge_contacts(bodies, x, start):
     aa, ee, ff = dot(d1, d1), dot(d2, d2), dot(d2, r)
     cc, bb = dot(d1, r), dot(d1, d2)
     denominator = aa * ee - bb * bb
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):   # parallel edges: no closest pair
         s = (bb * ff - cc * ee) / denominator
         t = (bb * s + ff) / ee
-    inside = (aa > 0.0) & (ee > 0.0) & (denominator > 0.0) & (0.0 < s) & (s < 1.0) \
-        & (0.0 < t) & (t < 1.0)
+        inside = (aa > 0.0) & (ee > 0.0) & (denominator > 0.0) & (0.0 < s) & (s < 1.0) \
+            & (0.0 < t) & (t < 1.0)
+        d = ((1.0 - s)[:, None] * a + s[:, None] * b - (1.0 - t)[:, None] * c - t[:, None] * q)
+        distance = np.sqrt(dot(d, d))
+        s4 = start[nodes]
+        along = dot(d, (1.0 - s)[:, None] * s4[:, 0] + s[:, None] * s4[:, 1]
+                    - (1.0 - t)[:, None] * s4[:, 2] - t[:, None] * s4[:, 3])
     rest = 0.5 * (thickness[edge_body[e]] + thickness[edge_body[f]])
-    d = ((1.0 - s)[:, None] * a + s[:, None] * b - (1.0 - t)[:, None] * c - t[:, None] * q)
-    distance = np.sqrt(dot(d, d))
-    s4 = start[nodes]
-    along = dot(d, (1.0 - s)[:, None] * s4[:, 0] + s[:, None] * s4[:, 1]
-                - (1.0 - t)[:, None] * s4[:, 2] - t[:, None] * s4[:, 3])
     sign = np.where(along >= 0.0, 1.0, -1.0)
     keep = np.flatnonzero(inside & (distance < rest) & (distance > 0.0))
     weights, normal, gap = edge_geometry(x4[keep], sign[keep])
@@ -623,23 +609,11 @@ def far_from_bodies(physical, h, start, end) -> bool:
     x = end[0]
     slack = 2.0 * h * float(np.sqrt(np.max(dot(start[1], start[1]), initial=0.0)
                                     + np.max(dot(end[1], end[1]), initial=0.0)))
-    thickness = bodies.thickness
-
-    def reach(u, w):
-        return 2.0 * (thickness[u] + thickness[w]) + slack
-
     if len(bodies.triangles):
-        corners, point_x = x[bodies.triangles], x[bodies.points]
-        near, _ = candidate_pairs((point_x, point_x), (corners.min(axis=1), corners.max(axis=1)),
-                                  bodies.body[bodies.points], bodies.body[bodies.triangles[:, 0]],
-                                  reach)
-        if len(near):
-            return False
-    if len(bodies.edges):
-        ends = x[bodies.edges]
-        boxes = (ends.min(axis=1), ends.max(axis=1))
-        edge_body = bodies.body[bodies.edges[:, 0]]
-        if len(candidate_pairs(boxes, boxes, edge_body, edge_body, reach)[0]):
+        # 2 rest distances (a contact's reach) and the correction's move (a rest distance
+        # and what the particle slid)
+        points, edges = near_pairs(bodies, x, 2.0 * float(bodies.thickness.max()) + slack)
+        if len(points) or len(edges):
             return False
     for a in bodies.balls:
         distance = np.sqrt(dot(x - x[a], x - x[a]))

@@ -175,7 +175,7 @@ def projection_vjp(springs: Springs, w: np.ndarray, g: np.ndarray) -> np.ndarray
 
 # --- spring and damper forces -------------------------------------------------------------------
 
-def spring_forces(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+def reference_spring_forces(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarray:
     springs = geometry(physical, x)
     w = per_spring(physical, v)
     factor = -physical.ks * (springs.length - physical.rest) - physical.kd * dot(w, springs.unit)
@@ -325,6 +325,14 @@ def reference_system_product_vjp(physical: Physical, x, u, g, h, x_bar,
 
 
 # --- the same through the kernels (kernels.py): what the adjoints call --------------------------
+
+def spring_forces(physical: Physical, x, v) -> np.ndarray:
+    """reference_spring_forces, in a kernel."""
+    out = np.zeros_like(x)
+    kernels.add_spring_forces(physical.a, physical.b, physical.ks, physical.kd, physical.rest,
+                              np.ascontiguousarray(x), np.ascontiguousarray(v), out)
+    return out
+
 
 def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
     """reference_spring_forces_vjp, in a kernel."""
