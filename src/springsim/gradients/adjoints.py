@@ -23,6 +23,8 @@ from .body_contact import far_from_bodies, respond, respond_vjp
 from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
+from .implicit_bodies import adjoint as bodies_adjoint, check_replayed, touches_bodies
+from .implicit_bodies import replay as bodies_replay
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
@@ -222,7 +224,12 @@ class ImplicitEulerAdjoint(Adjoint):
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
         release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
         v = aim(physical, x, v, h)
+        bodies = touches_bodies(physical, h, start, end)
         if len(start) == 3 and touches_planes(physical, h, start, end):
+            if bodies:
+                raise SceneError("bodies", "contact", "touch each other in a step where they "
+                                 "also touch a terrain under implicit_euler, which gradients "
+                                 "do not follow yet (the explicit methods' do)")
             if holds(physical):
                 raise SceneError("attachments", "hard", "hold bodies that touch a terrain "
                                  "under implicit_euler, which gradients do not follow yet: "
@@ -232,6 +239,9 @@ class ImplicitEulerAdjoint(Adjoint):
             _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
             x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,
                                                              v_bar, carried, bar)
+        elif bodies:
+            self.carried_bar = None
+            x_bar, v_bar = self.bodies_vjp(physical, h, x, v, end, x_bar, v_bar, bar)
         else:
             self.carried_bar = None   # a step without contacts leaves no damper behind
             estimates = None
@@ -244,6 +254,19 @@ class ImplicitEulerAdjoint(Adjoint):
                                            estimates)
         release(physical, x_bar, v_bar)   # placed at the step's start, then aimed
         return x_bar, v_bar
+
+    def bodies_vjp(self, physical, h, x, v, end, x_bar, v_bar, bar):
+        """A step with body-body contact (implicit_bodies.py): replayed with the forward's
+        solver, checked against the recorded end, then differentiated."""
+        if holds(physical):
+            raise SceneError("attachments", "hard", "hold bodies that touch each other under "
+                             "implicit_euler, which gradients do not follow yet: give the "
+                             "attachments a stiffness")
+        if self.solver is None:
+            self.solver = ForwardSolver(self.model, self.integrator)
+        x_out, v_out, replayed = bodies_replay(physical, self.integrator, self.solver, h, x, v)
+        check_replayed((x_out, v_out), end, h, self.integrator.cg_tolerance)
+        return bodies_adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, self.solver)
 
     def estimates(self, physical, h, x, v, dv_end):
         """solve.newton_estimates with the forward's own solver (made on first use)."""

@@ -385,24 +385,42 @@ def respond(physical, x, v, start):
     if not len(contacts.nodes):
         return x, v, None
     inv = physical.inv_mass
-    nodes, c, n = contacts.nodes, contacts.weights, contacts.normal
-    count = np.zeros(len(x))
+    nodes, c = contacts.nodes, contacts.weights
+    count, mobility = mobilities(inv, nodes, c)
+    v, passes, stuck = impulse_passes(inv, v, contacts, mobility, np.zeros(len(c)), True)
+    shift = overlap_shifts(contacts, x, start, stuck, mobility)
+    x_out = x.copy()
+    scatter(c, nodes, inv, shift, x_out)
+    return x_out, v, Response(contacts, count, mobility, passes, stuck, x, start, shift)
+
+
+def mobilities(inv, nodes, c):
+    """(how many contacts each particle takes part in (P,), each contact's mobility
+    W = sum_i c_i^2 n_i / m_i (K,)): response/impulses.split_mobilities."""
+    count = np.zeros(len(inv))
     np.add.at(count, nodes[c != 0.0], 1.0)
     terms = c * c * inv[nodes] * count[nodes]
-    mobility = ((terms[:, 0] + terms[:, 1]) + terms[:, 2]) + terms[:, 3]
-    params = contacts.params
+    return count, ((terms[:, 0] + terms[:, 1]) + terms[:, 2]) + terms[:, 3]
+
+
+def impulse_passes(inv, v, contacts, mobility, pushed, push):
+    """response/impulses.impulse_passes: (v after them, [Pass], which contacts stuck). Friction
+    against the accumulated normal impulse, which starts at ``pushed``; with ``push`` the
+    normal impulses that stop each approach too (restitution in the first pass)."""
+    nodes, c, n, params = contacts.nodes, contacts.weights, contacts.normal, contacts.params
     restitution, kinetic, static = params[:, 0], params[:, 1], params[:, 2]
-    total, rubbed, target = np.zeros(len(c)), np.zeros((len(c), 3)), np.zeros(len(c))
+    total, rubbed, target = pushed.copy(), np.zeros((len(c), 3)), np.zeros(len(c))
     stuck = np.zeros(len(c), bool)
     v, passes = v.copy(), []
-    for sweep in range(int(params[:, 5].max())):
+    for sweep in range(int(params[:, 5].max(initial=0))):
         active = (mobility > 0.0) & (sweep < params[:, 5])
         relative = gather(c, nodes, v)
         approach = dot(relative, n)
-        if sweep == 0:
+        if sweep == 0 and push:
             target = -restitution * np.minimum(approach, 0.0)
+        pushes = push & (target - approach > 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
-            j = np.where(active, np.maximum(target - approach, 0.0) / mobility, 0.0)
+            j = np.where(active & pushes, (target - approach) / mobility, 0.0)
             total = total + j
             w = rubbed - (relative - approach[:, None] * n) / mobility[:, None]
             size = np.sqrt(dot(w, w))
@@ -410,15 +428,12 @@ def respond(physical, x, v, start):
             cut = np.where(sticks, 1.0, kinetic * total / size)
         wanted = np.where(sticks[:, None], w, w * cut[:, None])
         impulse = np.where(active[:, None], (wanted - rubbed) + j[:, None] * n, 0.0)
-        passes.append(Pass(active, v.copy(), relative, approach, target - approach > 0.0, j, w,
-                           sticks, total, impulse))
+        passes.append(Pass(active, v.copy(), relative, approach, pushes, j, w, sticks, total,
+                           impulse))
         rubbed = np.where(active[:, None], wanted, rubbed)
         stuck = np.where(active, sticks & (static > 0.0), stuck)
         scatter(c, nodes, inv, impulse, v)
-    shift = overlap_shifts(contacts, x, start, stuck, mobility)
-    x_out = x.copy()
-    scatter(c, nodes, inv, shift, x_out)
-    return x_out, v, Response(contacts, count, mobility, passes, stuck, x, start, shift)
+    return v, passes, stuck
 
 
 def slid(contacts, x, start):
@@ -480,8 +495,8 @@ def respond_vjp(physical, response, x_bar, v_bar, bar):
     x_bar, v_bar = x_bar.copy(), v_bar.copy()
     start_bar = np.zeros_like(x_bar)
     overlap_vjp(physical, response, x_bar, start_bar, bars)
-    passes_vjp(physical, response, v_bar, bars)
-    mobility_vjp(physical, response, bars)
+    impulse_passes_vjp(physical, contacts, response.mobility, response.passes, v_bar, bars)
+    mobility_vjp(physical, contacts, response.count, bars)
     geometry_vjp(contacts, response.x, bars, x_bar)
     inv = physical.inv_mass
     bar.mass += np.where(physical.free, -bars.inv_mass * inv * inv, 0.0)
@@ -515,16 +530,16 @@ def overlap_vjp(physical, response, x_bar, start_bar, bars):
               .reshape(-1, 3))
 
 
-def passes_vjp(physical, response, v_bar, bars):
-    """Back through the Jacobi passes of the impulses (respond), last first."""
-    contacts, mobility = response.contacts, response.mobility
+def impulse_passes_vjp(physical, contacts, mobility, passes, v_bar, bars):
+    """Back through ``impulse_passes``, last pass first: v_bar in place, the contacts' and the
+    masses' cotangents into ``bars``; returns the cotangent of the starting ``pushed``."""
     nodes, c, n, params = contacts.nodes, contacts.weights, contacts.normal, contacts.params
     restitution, kinetic = params[:, 0], params[:, 1]
     count = len(c)
     total_bar, rubbed_bar, target_bar = np.zeros(count), np.zeros((count, 3)), np.zeros(count)
     safe = np.where(mobility > 0.0, mobility, 1.0)
-    for sweep in reversed(range(len(response.passes))):
-        one = response.passes[sweep]
+    for sweep in reversed(range(len(passes))):
+        one = passes[sweep]
         act = one.active
         impulse_bar = np.where(act[:, None], scatter_vjp(c, nodes, physical.inv_mass,
                                                          one.impulse, v_bar, bars), 0.0)
@@ -563,12 +578,13 @@ def passes_vjp(physical, response, v_bar, bars):
         relative_bar = np.where(act[:, None], relative_bar, 0.0)
         gather_vjp(c, nodes, one.v, relative_bar, v_bar, bars)
         rubbed_bar = previous_bar
+    return total_bar
 
 
-def mobility_vjp(physical, response, bars):
+def mobility_vjp(physical, contacts, count, bars):
     """W = sum_i c_i^2 m_i^-1 n_i (the particles' contact counts n_i fixed)."""
-    nodes, c = response.contacts.nodes, response.contacts.weights
-    inv, count = physical.inv_mass[nodes], response.count[nodes]
+    nodes, c = contacts.nodes, contacts.weights
+    inv, count = physical.inv_mass[nodes], count[nodes]
     bars.weights[...] += 2.0 * c * inv * count * bars.mobility[:, None]
     np.add.at(bars.inv_mass, nodes.ravel(), (c * c * count * bars.mobility[:, None]).ravel())
 

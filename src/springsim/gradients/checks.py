@@ -5,16 +5,17 @@ Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py),
 dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
 (pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
 implicit_contact.py), and with spheres, bowls and meshes, with terrains moving rigidly and with
-deforming meshes under the explicit methods (contact.py); body-body contact (surfaces of two
-bodies, balls with balls and particles) under the explicit methods (body_contact.py). Not yet
-covered, so refused rather than given a gradient that leaves a force out: contact with curved,
-moving or deforming terrains under implicit_euler, hard attachments on bodies that touch a
-terrain under implicit_euler (adjoints.py refuses them at that step), body-body and ball
-contact under implicit_euler, self contact, and the wind on balls. A terrain the adjoint does
-not follow may be in the scene as long as no particle comes within its contact band during the
-run (``contact_check``); under implicit_euler balls may be, and touch the terrains the adjoint
-follows (a ball is a particle whose terrain offset is its radius), as long as none comes within
-reach of another ball or particle (``ball_check``).
+deforming meshes under the explicit methods (contact.py); body-body contact of surfaces under
+every integrator, and of balls with balls and particles under the explicit methods
+(body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than given a gradient
+that leaves a force out: contact with curved, moving or deforming terrains under implicit_euler,
+hard attachments on bodies that touch a terrain or each other under implicit_euler, a step in
+which bodies touch each other and a terrain at once under implicit_euler, and ball contact there
+(adjoints.py refuses these at that step), self contact, and the wind on balls. A terrain the
+adjoint does not follow may be in the scene as long as no particle comes within its contact band
+during the run (``contact_check``); under implicit_euler balls may be, and touch the terrains the
+adjoint follows (a ball is a particle whose terrain offset is its radius), as long as none comes
+within reach of another ball or particle (``ball_check``).
 """
 import numpy as np
 
@@ -36,12 +37,6 @@ def check_supported(simulation) -> None:
         if self_colliding:
             raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
                              "self contact yet: set it to false")
-    surfaces = np.unique(arrays.particle_body[arrays.surface_points]) if len(
-        arrays.surface_points) else []
-    if len(surfaces) > 1 and name == "implicit_euler":
-        raise SceneError("bodies", f"{len(surfaces)} bodies with surfaces", "may touch each "
-                         "other, and gradients follow body-body contact under the explicit "
-                         "methods only (" + ", ".join(sorted(set(ADJOINTS) - {name})) + ")")
 
 
 def step_checks(simulation, physical=None):

@@ -75,13 +75,15 @@ class ForwardSolver:
         if blows(physical):
             self.blocks[slots] += wind_blocks(physical, x, v, h)
 
-    def solve(self, rhs):
-        """u with A u = rhs on the free particles (zero on the pinned ones)."""
+    def solve(self, rhs, contacts=None):
+        """u with A u = rhs on the free particles (zero on the pinned ones); A with the active
+        penalty ``contacts`` (contact_sets.SolveContacts) if given."""
         from ..implicit.cg import contact_cg
 
         u = np.zeros_like(rhs)
         r, s, c, q = self.work
-        done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, self.contacts,
+        contacts = self.contacts if contacts is None else contacts
+        done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, contacts,
                              self.layout.coarse, np.ascontiguousarray(rhs), self.kind,
                              self.normal, u, self.tolerance, self.max_iterations, 0.0, r, s, c,
                              q)
@@ -203,7 +205,14 @@ def system_vjp_iteration(physical, h, x, v, dv, dv_next, first, dv_bar, x_bar, v
     x_k, v_k = estimate(x, v, dv, h, first)
     solver.assemble(physical, x_k, v_k, h)
     lam = solver.solve(dv_bar)          # A symmetric: A^-T = A^-1
-    ddv = dv_next - dv
+    return iteration_vjp(physical, h, x, v, dv, dv_next - dv, first, lam, dv_bar, x_bar, v_bar,
+                         bar)
+
+
+def iteration_vjp(physical, h, x, v, dv, ddv, first, lam, dv_bar, x_bar, v_bar, bar):
+    """system_vjp_iteration after its solve: ``lam`` = A^-1 dv_bar, ``ddv`` the iteration's
+    solution. Adds the cotangents of x, v and the parameters, returns that of dv."""
+    x_k, v_k = estimate(x, v, dv, h, first)
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
     # r_k's share
     rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar)

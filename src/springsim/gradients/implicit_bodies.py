@@ -1,0 +1,357 @@
+"""Backward Euler's body-body contact in the adjoint: the solve's penalty springs
+(collision/response/penalty.py) and their friction after the solve
+(collision/response/solve_friction.py), then the post-step pass (body_contact.py).
+
+The forward, for surfaces of two bodies (integrators/implicit_euler.py):
+
+    contacts        every pair the step can bring together (contact_sets/solve.py)
+    per Newton iteration k, at the estimate e_k = x + h (v + dv_k):
+      linearize     each pair's stencil c and normal n at e_k, its gap g = n . sum_i c_i e_i - R,
+                    its coefficient h^2 k = STIFFNESS / sum_i c_i^2 / m_i; active if g < 0
+      solve         (A_k + sum_active h^2 k J^T J) ddv = r_k - sum_active c_i (h^2 k) g / h n,
+                    J = n^T sum_i c_i e_i; the active set updated from phi = g + h J ddv and
+                    solved again (at most MAX_CONTACT_UPDATES times)
+    end             friction against each active contact's push h k (-phi), phi at the step's
+                    end x + h v_K, in the impulses' Jacobi passes; x' = x + h v
+    post-step pass  impulses and overlap correction (body_contact.respond)
+
+``replay`` runs it again with the forward's own kernels for the contact set, the linearization
+and the solves (so the active sets are the forward's), and keeps what the adjoint needs;
+``adjoint`` goes back through it. Each solve's adjoint is one solve with the same matrix,
+contacts included: lambda = A^-1 dv_bar; the cotangent of the contacts' matrix is
+-lambda ddv^T and of their right-hand side lambda, which reach the coefficients, gaps, stencils
+and normals, and through the stencils' closest points (complex step, as body_contact.py) the
+estimate's and the start's positions. The active set, the closest-point regions and the
+sides are the branches the run took.
+
+Covered: point-triangle and edge-edge contacts of two bodies' surfaces. A step in which
+particles also touch a terrain, or balls touch anything, is refused (checks.py, adjoints.py).
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ..collision.contact_sets import EDGE_EDGE, POINT_TRIANGLE, SolveContacts
+from ..collision.contact_sets.solve import find_solve_contacts
+from ..collision.pair_lists.own_pairs import OwnPairs
+from ..collision.pair_lists.solve_pairs import kept_surface_pairs
+from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
+                                          newton_iterations_needed, update_active_contacts)
+from ..errors import SceneError
+from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
+from .body_contact import (STEP, Bars, Contacts, Geometry, closest_weights, cross, dot, dot4,
+                           far_from_bodies,
+                           gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
+                           respond, respond_vjp, surface_params)
+from .solve import estimate, iteration_vjp, newton_rhs
+
+
+class Linearized(NamedTuple):
+    """One Newton iteration: where it started and the contacts as its last solve had them."""
+
+    dv: np.ndarray          # (P, 3) the estimate's velocity change
+    first: bool
+    contacts: SolveContacts   # copies: weights, normal, gap, coefficient, active at its end
+    ddv: np.ndarray         # (P, 3) its solution
+
+
+class Friction(NamedTuple):
+    """The friction after the solve: its stencils (rows of the last iteration's contacts)."""
+
+    rows: np.ndarray        # the active contacts
+    phi: np.ndarray         # (R,) their gaps at the step's end before it
+    pushed: np.ndarray      # (R,) N s: their pushes
+    contacts: Contacts      # as the impulse passes take them
+    count: np.ndarray       # (P,) contacts per particle
+    mobility: np.ndarray
+    passes: list
+
+
+class Replay(NamedTuple):
+    iterations: list        # [Linearized]
+    x_before: np.ndarray    # (P, 3) x + h v_K, before the friction
+    v_end: np.ndarray       # (P, 3) v_K
+    friction: Friction
+    x_end: np.ndarray       # (P, 3) x + h v after the friction: the post-step pass's input
+    v_after: np.ndarray
+    response: object        # body_contact.Response or None
+
+
+def touches_bodies(physical, h, start, end) -> bool:
+    """Whether the step from ``start`` to ``end`` may have had body-body contact: some pair
+    within reach at its end, or at the start's prediction x + h v (body_contact.far_from_bodies
+    for both)."""
+    if not physical.bodies.collide:
+        return False
+    predicted = (start[0] + h * start[1], start[1])
+    return not (far_from_bodies(physical, h, start, end)
+                and far_from_bodies(physical, h, start, predicted))
+
+
+def copy_contacts(contacts):
+    return SolveContacts(*(np.array(part) for part in contacts))
+
+
+def replay(physical, integrator, solver, h, x, v):
+    """The step as the forward took it (module doc): (x', v', Replay)."""
+    arrays = physical.bodies.arrays
+    none = np.empty((0, 2), np.int64)
+    contacts = find_solve_contacts(arrays, np.ascontiguousarray(x), np.ascontiguousarray(v), h,
+                                   kept_surface_pairs(x), OwnPairs(none, none))
+    needed = newton_iterations_needed(arrays, contacts, np.ascontiguousarray(v), h,
+                                      integrator.newton_iterations)
+    dv, iterations = np.zeros_like(x), []
+    for k in range(needed):
+        first = k == 0
+        x_k, v_k = estimate(x, v, dv, h, first)
+        rhs = np.ascontiguousarray(newton_rhs(physical, h, x, v, dv, first))
+        solver.assemble(physical, x_k, v_k, h)
+        linearize_contacts(arrays, contacts, x, v, dv, h, rhs)
+        ddv = solver.solve(rhs, contacts)
+        for _ in range(MAX_CONTACT_UPDATES):
+            if update_active_contacts(contacts, h, ddv, rhs) == 0:
+                break
+            ddv = solver.solve(rhs, contacts)
+        iterations.append(Linearized(dv, first, copy_contacts(contacts), ddv))
+        dv = dv + ddv
+    v_end = v + dv
+    x_before = x + h * v_end
+    friction = end_friction(physical, iterations[-1].contacts, x_before, h)
+    v_after = v_end.copy()
+    if len(friction.rows):
+        v_after, friction = rub(physical, friction, v_end)
+    x_end = x + h * v_after
+    x_out, v_out, response = respond(physical, x_end, v_after, x)
+    return x_out, v_out, Replay(iterations, x_before, v_end, friction, x_end, v_after, response)
+
+
+def end_friction(physical, contacts, x_end, h):
+    """solve_friction.apply_contact_friction's contacts: the active ones, their gaps at x_end,
+    their pushes and parameters (surfaces: the means of the two bodies' keys)."""
+    rows = np.flatnonzero(contacts.active)
+    nodes, c, n = contacts.nodes[rows], contacts.weights[rows], contacts.normal[rows]
+    phi = dot(gather(c, nodes, x_end), n) - contacts.rest[rows]
+    pushed = contacts.coefficient[rows] * np.maximum(-phi, 0.0) / h
+    body = physical.bodies.body
+    params = surface_params(physical.bodies, body[nodes[:, 0]], body[nodes[:, 3]])
+    count, mobility = mobilities(physical.inv_mass, nodes, c)
+    geometry = Geometry(np.zeros(len(rows), np.int64), np.zeros(len(rows), bool),
+                        np.zeros(len(rows), np.int64), np.ones(len(rows)), contacts.rest[rows],
+                        np.column_stack([body[nodes[:, 0]], body[nodes[:, 3]]]))
+    return Friction(rows, phi, pushed, Contacts(nodes, c, n, np.zeros(len(rows)), params,
+                                                geometry), count, mobility, [])
+
+
+def rub(physical, friction, v):
+    """response/impulses.apply_friction: the friction passes against the pushes."""
+    v, passes, _ = impulse_passes(physical.inv_mass, v, friction.contacts, friction.mobility,
+                                  friction.pushed, push=False)
+    return v, friction._replace(passes=passes)
+
+
+def check_replayed(replayed, end, h, tolerance):
+    """Refuse a step whose replay does not end where the forward did: one the forward took in
+    halves (a surface carried through another), or whose active set came out otherwise. The
+    replay's solves start from zero, the forward's from the last step's change, so the two
+    agree to about the CG ``tolerance``: allowed a thousand times that, relative to the
+    fastest speed."""
+    x_out, v_out = replayed
+    allowed = max(1e-9, 1e3 * tolerance) * max(1.0, float(np.abs(end[1]).max()))
+    if not (np.abs(v_out - end[1]).max() <= allowed
+            and np.abs(x_out - end[0]).max() <= h * allowed):
+        raise SceneError("integrator", "implicit_euler", "took a step with body-body contact "
+                         "that the gradient cannot follow (taken in halves, or its contacts "
+                         "changed within the solve's tolerance): try a smaller dt or a tighter "
+                         "cg_tolerance")
+
+
+# ---- the adjoint ------------------------------------------------------------------------------
+
+def adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, solver):
+    """The cotangents of (x, v) at the step's start from those after it (module doc)."""
+    x_bar, v_bar = x_bar.copy(), v_bar.copy()
+    start_bar = np.zeros_like(x)
+    if replayed.response is not None:
+        x_bar, v_bar, start_bar = respond_vjp(physical, replayed.response, x_bar, v_bar, bar)
+    out_x = start_bar + x_bar            # x' = x + h v_after
+    v_after_bar = v_bar + h * x_bar
+    v_end_bar = v_after_bar
+    last = replayed.iterations[-1]
+    geometry_bars = contact_bars(last.contacts)
+    if len(replayed.friction.rows):
+        v_end_bar = friction_vjp(physical, replayed, v_after_bar, geometry_bars, out_x, h, bar)
+    out_v = v_end_bar.copy()             # v_K = v + dv_K
+    dv_bar = v_end_bar
+    for k in reversed(range(len(replayed.iterations))):
+        one = replayed.iterations[k]
+        bars = geometry_bars if k == len(replayed.iterations) - 1 else contact_bars(one.contacts)
+        x_k, v_k = estimate(x, v, one.dv, h, one.first)
+        solver.assemble(physical, x_k, v_k, h)
+        lam = solver.solve(np.ascontiguousarray(dv_bar), one.contacts)
+        penalty_vjp(one.contacts, lam, one.ddv, h, bars)
+        dv_bar = iteration_vjp(physical, h, x, v, one.dv, one.ddv, one.first, lam, dv_bar,
+                               out_x, out_v, bar)
+        estimate_bar = linearization_vjp(physical, one.contacts, x, v, one.dv, h, bars, out_x,
+                                         bar)
+        out_x += estimate_bar   # e_k = x + h (v + dv_k)
+        out_v += h * estimate_bar
+        dv_bar = dv_bar + h * estimate_bar
+    return out_x, out_v
+
+
+def contact_bars(contacts):
+    """Zeroed cotangents of a contact set's weights, normals, gaps and coefficients."""
+    count = len(contacts.nodes)
+    return Bars(np.zeros((count, 4)), np.zeros((count, 3)), np.zeros(count),
+                np.zeros(count), np.zeros(0), np.zeros(count), np.zeros(0))
+
+
+def friction_vjp(physical, replayed, v_bar, bars, x_bar, h, bar):
+    """Back through the friction passes and the pushes they took (end_friction); returns the
+    cotangent of v_K; the gaps' share goes to x_bar and the contacts' ``bars`` (its
+    ``depth`` field holds the gap's, its ``mobility`` the coefficient's)."""
+    friction = replayed.friction
+    rows, contacts = friction.rows, friction.contacts
+    count = len(rows)
+    rub_bars = Bars(np.zeros((count, 4)), np.zeros((count, 3)), np.zeros(count),
+                    np.zeros(count), np.zeros(len(v_bar)), np.zeros(count), np.zeros(count))
+    v_bar = v_bar.copy()
+    pushed_bar = impulse_passes_vjp(physical, contacts, friction.mobility, friction.passes,
+                                    v_bar, rub_bars)
+    mobility_vjp(physical, contacts, friction.count, rub_bars)
+    bar.mass += np.where(physical.free, -rub_bars.inv_mass * physical.inv_mass ** 2, 0.0)
+    for side in (0, 3):   # a surface contact's friction is the mean of its two bodies'
+        np.add.at(bar.body_friction, physical.bodies.body[contacts.nodes[:, side]],
+                  0.5 * rub_bars.kinetic)
+    pressing = friction.phi < 0.0
+    coefficient = replayed.iterations[-1].contacts.coefficient[rows]
+    bars.mobility[rows] += np.where(pressing, -friction.phi / h * pushed_bar, 0.0)
+    phi_bar = np.where(pressing, -coefficient / h * pushed_bar, 0.0)
+    # phi = n . sum_i c_i x_end[n_i] - R, x_end = x + h v_K
+    along = gather(contacts.weights, contacts.nodes, replayed.x_before)
+    bars.normal[rows] += phi_bar[:, None] * along
+    bars.weights[rows] += rub_bars.weights + phi_bar[:, None] * np.einsum(
+        "kjc,kc->kj", replayed.x_before[contacts.nodes], contacts.normal)
+    bars.normal[rows] += rub_bars.normal
+    end_bar = np.zeros_like(v_bar)
+    np.add.at(end_bar, contacts.nodes.ravel(), (contacts.weights[:, :, None] * (
+        phi_bar[:, None] * contacts.normal)[:, None, :]).reshape(-1, 3))
+    x_bar += end_bar
+    return v_bar + h * end_bar
+
+
+def penalty_vjp(contacts, lam, ddv, h, bars):
+    """The active contacts' share of the solve's adjoint: matrix sum h^2k J^T J (cotangent
+    -lambda ddv^T), right-hand side -c_i h^2k g / h n (cotangent lambda)."""
+    rows = np.flatnonzero(contacts.active)
+    nodes, c, n = contacts.nodes[rows], contacts.weights[rows], contacts.normal[rows]
+    k, g = contacts.coefficient[rows], contacts.gap[rows]
+    lam_c, ddv_c = gather(c, nodes, lam), gather(c, nodes, ddv)   # sum_i c_i u_i
+    j_lam, j_ddv = dot(n, lam_c), dot(n, ddv_c)
+    push = -k * g / h
+    bars.mobility[rows] += -g / h * j_lam - j_lam * j_ddv
+    bars.depth[rows] += -k / h * j_lam
+    bars.normal[rows] += (push[:, None] * lam_c - k[:, None] * (j_ddv[:, None] * lam_c
+                                                                 + j_lam[:, None] * ddv_c))
+    n_lam = np.einsum("kjc,kc->kj", lam[nodes], n)
+    n_ddv = np.einsum("kjc,kc->kj", ddv[nodes], n)
+    bars.weights[rows] += (push[:, None] * n_lam
+                           - k[:, None] * (j_ddv[:, None] * n_lam + j_lam[:, None] * n_ddv))
+
+
+def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
+    """Back through linearize_contacts for the contacts whose cotangents ``bars`` holds (gap in
+    ``depth``, coefficient in ``mobility``): the coefficient's masses and stencil, the gap's
+    estimate and stencil, the stencil's and normal's closest points. Returns the estimate's
+    cotangent; the start's is added to x_bar."""
+    rows = np.flatnonzero((bars.mobility != 0.0) | (bars.depth != 0.0)
+                          | np.any(bars.weights != 0.0, axis=1) | np.any(bars.normal != 0.0,
+                                                                            axis=1))
+    estimate_bar = np.zeros_like(x)
+    if not len(rows):
+        return estimate_bar
+    nodes, c, n = contacts.nodes[rows], contacts.weights[rows], contacts.normal[rows]
+    inv = physical.inv_mass[nodes]
+    k = contacts.coefficient[rows]
+    e = x + h * (v + dv)
+    # k = STIFFNESS / sum_i c_i^2 w_i
+    k_bar = bars.mobility[rows]
+    shared = -k * k / STIFFNESS * k_bar
+    c_bar = bars.weights[rows] + 2.0 * shared[:, None] * c * inv
+    inv_bar = np.zeros(len(x))
+    np.add.at(inv_bar, nodes.ravel(), (shared[:, None] * c * c).ravel())
+    bar.mass += np.where(physical.free, -inv_bar * physical.inv_mass ** 2, 0.0)
+    # g = n . sum_i c_i e_i - R
+    g_bar = bars.depth[rows]
+    n_bar = bars.normal[rows] + g_bar[:, None] * gather(c, nodes, e)
+    c_bar += g_bar[:, None] * np.einsum("kjc,kc->kj", e[nodes], n)
+    np.add.at(estimate_bar, nodes.ravel(), (c[:, :, None] * (g_bar[:, None] * n)[:, None, :])
+              .reshape(-1, 3))
+    e4, s4 = e[nodes], x[nodes]
+    flipped, face, region, sign = stencil_branches(contacts.shape[rows], c, n, e4, s4)
+    e4_bar, s4_bar = np.zeros(e4.shape), np.zeros(s4.shape)
+    for which, positions, out in ((0, e4, e4_bar), (1, s4, s4_bar)):
+        z = positions.astype(complex)
+        other = s4 if which == 0 else e4
+        for corner in range(4):
+            for axis in range(3):
+                z[:, corner, axis] += 1j * STEP
+                pair = (z, other) if which == 0 else (other, z)
+                weights, normal = solve_stencil(contacts.shape[rows], flipped, face, region,
+                                                sign, *pair)
+                z[:, corner, axis] -= 1j * STEP
+                out[:, corner, axis] = (dot4(c_bar, weights.imag)
+                                        + dot(n_bar, normal.imag)) / STEP
+    np.add.at(estimate_bar, nodes.ravel(), e4_bar.reshape(-1, 3))
+    np.add.at(x_bar, nodes.ravel(), s4_bar.reshape(-1, 3))
+    return estimate_bar
+
+
+def stencil_branches(shape, c, n, e4, s4):
+    """The branches narrow_phase/solve.stencil took: an edge pair's normal from the start (the
+    step passed it through), a point's face, its closest-point region, the face normal's side."""
+    if np.any((shape != POINT_TRIANGLE) & (shape != EDGE_EDGE)):
+        raise SceneError("bodies", "balls", "touch other particles under implicit_euler, "
+                         "which gradients do not follow yet")
+    point = shape == POINT_TRIANGLE
+    w, region = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3])
+    face = point & (w[:, 0] > 0.0) & (w[:, 1] > 0.0) & (w[:, 2] > 0.0)
+    d, s = np.einsum("kj,kjc->kc", c, e4), np.einsum("kj,kjc->kc", c, s4)
+    flipped = ~point & (dot(d, s) <= 0.0)
+    start_normal = cross(s4[:, 2] - s4[:, 1], s4[:, 3] - s4[:, 1])
+    sign = np.where(dot(start_normal, s) < 0.0, -1.0, 1.0)
+    return flipped, face, region, sign
+
+
+def solve_stencil(shape, flipped, face, region, sign, e4, s4):
+    """(weights, normal) of narrow_phase/solve.stencil in the branches given, for complex
+    positions (the complex step)."""
+    point = shape == POINT_TRIANGLE
+    kind = np.result_type(e4, s4)
+    weights = np.zeros((len(shape), 4), dtype=kind)
+    normal = np.zeros((len(shape), 3), dtype=kind)
+    if point.any():
+        p, a, b, c = (e4[point, i] for i in range(4))
+        w, _ = closest_weights(p, a, b, c, region[point])
+        weights[point] = np.concatenate([np.ones_like(w[:, :1]), -w], axis=1)
+        area = cross(b - a, c - a)
+        d = p - w[:, 0:1] * a - w[:, 1:2] * b - w[:, 2:3] * c
+        with np.errstate(divide="ignore", invalid="ignore"):
+            normal[point] = np.where(face[point, None],
+                                     sign[point, None] * area / np.sqrt(dot(area, area))[:, None],
+                                     d / np.sqrt(dot(d, d))[:, None])
+    edge = ~point
+    if edge.any():
+        a, b, c, q = (e4[edge, i] for i in range(4))
+        d1, d2, r = b - a, q - c, a - c
+        aa, ee, ff = dot(d1, d1), dot(d2, d2), dot(d2, r)
+        cc, bb = dot(d1, r), dot(d1, d2)
+        s = (bb * ff - cc * ee) / (aa * ee - bb * bb)
+        t = (bb * s + ff) / ee
+        w = np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
+        weights[edge] = w
+        d = np.einsum("kj,kjc->kc", w, e4[edge])
+        start = np.einsum("kj,kjc->kc", w, s4[edge])
+        chosen = np.where(flipped[edge, None], start, d)
+        normal[edge] = chosen / np.sqrt(dot(chosen, chosen))[:, None]
+    return weights, normal
