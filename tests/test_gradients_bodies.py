@@ -53,6 +53,20 @@ def on_floor():
     return scene
 
 
+def on_moving_pins():
+    """The stacked cubes, the lower one's top layer pinned on a smooth keyed path that lifts and
+    shifts it: the upper one lands on particles that the pins place (each step's contacts have
+    pinned corners, with no mass, moving on their path)."""
+    from springsim.bodies.pins import Pin, Region
+    from springsim.motion import Keyframe, Motion
+    scene = stacked()
+    path = Motion(interpolation="smooth", keyframes=[
+        Keyframe(time=0.0), Keyframe(time=0.05, position=(0.02, 0.03, 0.01))])
+    scene.bodies[0].pins = [Pin(region=Region(min=(-1.0, 0.99, -1.0), max=(1.0, 1.01, 1.0)),
+                                motion=path)]
+    return scene
+
+
 def overhang():
     """The upper cube over the lower one's corner, 2 cm beyond its edges: its particles meet
     the lower top's corners and edges, and the lower's its faces' edges."""
@@ -80,6 +94,8 @@ def apart():
 SCENES = {"stacked": (stacked, CUBE_KEYS), "overhang": (overhang, CUBE_KEYS),
           "on-floor": (on_floor, ["terrains.0.friction", "bodies.0.friction",
                                   "bodies.1.velocity", "gravity"]),
+          "on-moving-pins": (on_moving_pins, ["bodies.1.velocity", "bodies.1.friction",
+                                              "gravity", "bodies.0.structural.ks"]),
           "balls": (balls, ["bodies.1.balls.0.velocity", "bodies.1.balls.1.mass",
                             "bodies.0.structural.ks", "gravity", "drag"]),
           "apart": (apart, ["bodies.1.velocity", "bodies.0.structural.ks"])}
@@ -176,17 +192,27 @@ def test_bodies_touching_each_other_and_a_terrain_are_refused_under_implicit_eul
                  integrator="implicit_euler", dt=0.01)
 
 
+def test_concentric_balls_take_the_forwards_upward_normal_and_no_nan():
+    """A ball and its partner at one point: the forward pushes them apart along +y; the
+    replay's normal is the same and constant (its complex-step derivative zero), never NaN."""
+    x4 = np.zeros((1, 4, 3), complex)
+    x4[0, 0, 0] += 1j * body_contact.STEP
+    weights, normal, gap = body_contact.ball_geometry(x4, None)
+    assert np.array_equal(normal.real, [[0.0, 1.0, 0.0]])
+    assert np.all(np.isfinite(normal)) and np.all(normal.imag == 0.0)
+
+
 def test_a_replay_that_ends_elsewhere_is_refused():
-    """implicit_bodies.check_replayed: a step the forward took otherwise than the replay (in
+    """implicit_bodies.check_solved: a step the forward took otherwise than the replay (in
     halves, which a surface carried through another makes it do, or with another active set)
     ends elsewhere; beyond a thousand CG tolerances of the speed it is refused, within passes."""
-    from springsim.gradients.implicit_bodies import check_replayed
+    from springsim.gradients.implicit_bodies import check_solved
     rng = np.random.default_rng(0)
     x, v = rng.normal(size=(8, 3)), rng.normal(size=(8, 3))
     h, tolerance = 0.01, 1e-5
     speed = float(np.abs(v).max())
-    check_replayed((x, v + 0.5e3 * tolerance * speed), (x, v), h, tolerance)
+    check_solved((x, v + 0.5e3 * tolerance * speed), (x, v), h, tolerance)
     with pytest.raises(SceneError, match="cannot follow"):
-        check_replayed((x, v + 2e3 * tolerance * speed), (x, v), h, tolerance)
+        check_solved((x, v + 2e3 * tolerance * speed), (x, v), h, tolerance)
     with pytest.raises(SceneError, match="cannot follow"):
-        check_replayed((x + 2e3 * h * tolerance * speed, v), (x, v), h, tolerance)
+        check_solved((x + 2e3 * h * tolerance * speed, v), (x, v), h, tolerance)

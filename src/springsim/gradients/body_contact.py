@@ -30,6 +30,7 @@ from ..collision.broad_phase.balls import find_contacts
 from ..collision.broad_phase.surfaces import surface_pairs
 from ..collision.contact_sets import BALL_PASSES, CORRECTION, PASSES
 from ..collision.pair_lists.solve_pairs import NO_SELF_CONTACT
+from ..errors import SceneError
 
 STEP = 1e-30    # the complex step: its square and products vanish beside any coordinate
 
@@ -171,7 +172,7 @@ def closest_weights(p, a, b, c, region=None):
     choices = [(one, zero, zero), (zero, one, zero), (1.0 - t_ab, t_ab, zero),
                (zero, zero, one), (1.0 - t_ac, zero, t_ac), (zero, 1.0 - t_bc, t_bc),
                (1.0 - t_b - t_c, t_b, t_c), (one, zero, zero)]
-    w = np.zeros(p.shape, dtype=p.dtype)
+    w = np.zeros(p.shape, dtype=np.result_type(p, a, b, c))
     for code, (w0, w1, w2) in enumerate(choices):
         rows = region == code
         w[rows, 0], w[rows, 1], w[rows, 2] = w0[rows], w1[rows], w2[rows]
@@ -212,12 +213,17 @@ def edge_geometry(x4, sign):
 
 
 def ball_geometry(x4, _sign):
-    """(weights, normal, gap) of ball stencils (x4[:, 0] the ball, x4[:, 1] its partner)."""
+    """(weights, normal, gap) of ball stencils (x4[:, 0] the ball, x4[:, 1] its partner;
+    ``_sign`` unused: every kind's geometry takes one). Concentric: the normal is up, as the
+    forward chooses, and does not turn."""
     d = x4[:, 0] - x4[:, 1]
     distance = np.sqrt(dot(d, d))
     weights = np.zeros(x4.shape[:2], dtype=x4.dtype)
     weights[:, 0], weights[:, 1] = 1.0, -1.0
-    return weights, d / distance[:, None], distance
+    apart = np.real(distance) > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        normal = np.where(apart[:, None], d / distance[:, None], np.array([0.0, 1.0, 0.0]))
+    return weights, normal, distance
 
 
 def geometry_of(geometry: Geometry, rows, x4):
@@ -344,10 +350,14 @@ def ball_contacts(bodies, x):
         return empty_part()
     pairs = find_contacts(np.ascontiguousarray(x), bodies.radius, bodies.balls,
                           bodies.ball_slot)
-    a, b = pairs[:, 0], pairs[:, 1]
-    nodes = np.column_stack([a, b, b, b])
+    nodes = np.column_stack([pairs[:, 0], pairs[:, 1], pairs[:, 1], pairs[:, 1]])
     weights, normal, distance = ball_geometry(x[nodes], None)
-    rest = bodies.radius[a] + bodies.radius[b]
+    rest = bodies.radius[pairs[:, 0]] + bodies.radius[pairs[:, 1]]
+    # the search compares squares; the contact holds where the overlap itself is positive
+    keep = np.flatnonzero(rest - distance > 0.0)
+    nodes, weights, normal, distance, rest = (nodes[keep], weights[keep], normal[keep],
+                                              distance[keep], rest[keep])
+    a, b = nodes[:, 0], nodes[:, 1]
     ball, other = bodies.ball_slot[a], bodies.ball_slot[b]
     partner = np.where(other >= 0, other, ball)
     both = other >= 0
@@ -535,48 +545,49 @@ def impulse_passes_vjp(physical, contacts, mobility, passes, v_bar, bars):
     masses' cotangents into ``bars``; returns the cotangent of the starting ``pushed``."""
     nodes, c, n, params = contacts.nodes, contacts.weights, contacts.normal, contacts.params
     restitution, kinetic = params[:, 0], params[:, 1]
+    inv = physical.inv_mass
     count = len(c)
     total_bar, rubbed_bar, target_bar = np.zeros(count), np.zeros((count, 3)), np.zeros(count)
     safe = np.where(mobility > 0.0, mobility, 1.0)
     for sweep in reversed(range(len(passes))):
-        one = passes[sweep]
-        act = one.active
-        impulse_bar = np.where(act[:, None], scatter_vjp(c, nodes, physical.inv_mass,
-                                                         one.impulse, v_bar, bars), 0.0)
+        this_pass = passes[sweep]
+        active = this_pass.active
+        impulse_bar = np.where(active[:, None], scatter_vjp(c, nodes, inv, this_pass.impulse,
+                                                            v_bar, bars), 0.0)
         wanted_bar = impulse_bar + rubbed_bar
-        previous_bar = np.where(act[:, None], -impulse_bar, rubbed_bar)
+        previous_bar = np.where(active[:, None], -impulse_bar, rubbed_bar)
         j_bar = dot(impulse_bar, n)
-        bars.normal[...] += one.j[:, None] * impulse_bar
-        w, total = one.w, one.total
+        bars.normal[...] += this_pass.j[:, None] * impulse_bar
+        w, total = this_pass.w, this_pass.total
         with np.errstate(divide="ignore", invalid="ignore"):
             size = np.sqrt(dot(w, w))
             along_w = dot(w, wanted_bar)
-            slide = act & ~one.stuck
+            slide = active & ~this_pass.stuck
             q = np.where(slide, kinetic * total / size, 1.0)
             w_bar = q[:, None] * wanted_bar - np.where(
                 slide, kinetic * total * along_w / size ** 3, 0.0)[:, None] * w
             total_bar = total_bar + np.where(slide, kinetic * along_w / size, 0.0)
             bars.kinetic[...] += np.where(slide, total * along_w / size, 0.0)
-        w_bar = np.where(act[:, None], w_bar, 0.0)
+        w_bar = np.where(active[:, None], w_bar, 0.0)
         previous_bar = previous_bar + w_bar
-        tangential = one.relative - one.approach[:, None] * n
+        tangential = this_pass.relative - this_pass.approach[:, None] * n
         tangential_bar = -w_bar / safe[:, None]
-        bars.mobility[...] += np.where(act, dot(tangential, w_bar) / (safe * safe), 0.0)
+        bars.mobility[...] += np.where(active, dot(tangential, w_bar) / (safe * safe), 0.0)
         relative_bar = tangential_bar.copy()
         approach_bar = -dot(tangential_bar, n)
-        bars.normal[...] -= one.approach[:, None] * tangential_bar
-        j_bar = np.where(act, j_bar + total_bar, 0.0)
-        push = act & one.pushed
+        bars.normal[...] -= this_pass.approach[:, None] * tangential_bar
+        j_bar = np.where(active, j_bar + total_bar, 0.0)
+        push = active & this_pass.pushed
         target_bar = target_bar + np.where(push, j_bar / safe, 0.0)
         approach_bar -= np.where(push, j_bar / safe, 0.0)
-        bars.mobility[...] -= np.where(push, j_bar * one.j / safe, 0.0)
+        bars.mobility[...] -= np.where(push, j_bar * this_pass.j / safe, 0.0)
         if sweep == 0:
-            approach_bar += np.where(one.approach < 0.0, -restitution * target_bar, 0.0)
-            bars.restitution[...] -= np.minimum(one.approach, 0.0) * target_bar
+            approach_bar += np.where(this_pass.approach < 0.0, -restitution * target_bar, 0.0)
+            bars.restitution[...] -= np.minimum(this_pass.approach, 0.0) * target_bar
         relative_bar += approach_bar[:, None] * n
-        bars.normal[...] += approach_bar[:, None] * one.relative
-        relative_bar = np.where(act[:, None], relative_bar, 0.0)
-        gather_vjp(c, nodes, one.v, relative_bar, v_bar, bars)
+        bars.normal[...] += approach_bar[:, None] * this_pass.relative
+        relative_bar = np.where(active[:, None], relative_bar, 0.0)
+        gather_vjp(c, nodes, this_pass.v, relative_bar, v_bar, bars)
         rubbed_bar = previous_bar
     return total_bar
 
@@ -612,6 +623,16 @@ def geometry_vjp(contacts, x, bars, x_bar):
 
 def dot4(u, w):
     return u[:, 0] * w[:, 0] + u[:, 1] * w[:, 1] + u[:, 2] * w[:, 2] + u[:, 3] * w[:, 3]
+
+
+def check_replayed(replayed, end, h, allowed, what):
+    """Refuse a step whose replay (x, v) does not end where the forward did, ``end``, within
+    ``allowed`` m/s (and h ``allowed`` m): a gradient of another step would be no gradient.
+    ``what`` says which step and what to try."""
+    x_out, v_out = replayed
+    if not (np.abs(v_out - end[1]).max() <= allowed
+            and np.abs(x_out - end[0]).max() <= h * allowed):
+        raise SceneError("bodies", "contact", what)
 
 
 def far_from_bodies(physical, h, start, end) -> bool:

@@ -39,8 +39,8 @@ from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
                                           newton_iterations_needed, update_active_contacts)
 from ..errors import SceneError
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
-from .body_contact import (STEP, Bars, Contacts, Geometry, closest_weights, cross, dot, dot4,
-                           far_from_bodies,
+from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights, cross, dot,
+                           dot4, far_from_bodies,
                            gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
                            respond, respond_vjp, surface_params)
 from .solve import estimate, iteration_vjp, newton_rhs
@@ -112,6 +112,7 @@ def replay(physical, integrator, solver, h, x, v):
             if update_active_contacts(contacts, h, ddv, rhs) == 0:
                 break
             ddv = solver.solve(rhs, contacts)
+        refuse_balls(contacts)
         iterations.append(Linearized(dv, first, copy_contacts(contacts), ddv))
         dv = dv + ddv
     v_end = v + dv
@@ -125,6 +126,15 @@ def replay(physical, integrator, solver, h, x, v):
     return x_out, v_out, Replay(iterations, x_before, v_end, friction, x_end, v_after, response)
 
 
+def refuse_balls(contacts):
+    """Ball contacts of the solve are not followed yet (checks.ball_check refuses most before
+    the step)."""
+    surface = (contacts.shape == POINT_TRIANGLE) | (contacts.shape == EDGE_EDGE)
+    if np.any(contacts.active & ~surface):
+        raise SceneError("bodies", "balls", "touch other particles under implicit_euler, which "
+                         "gradients do not follow yet (the explicit methods' do)")
+
+
 def end_friction(physical, contacts, x_end, h):
     """solve_friction.apply_contact_friction's contacts: the active ones, their gaps at x_end,
     their pushes and parameters (surfaces: the means of the two bodies' keys)."""
@@ -135,11 +145,8 @@ def end_friction(physical, contacts, x_end, h):
     body = physical.bodies.body
     params = surface_params(physical.bodies, body[nodes[:, 0]], body[nodes[:, 3]])
     count, mobility = mobilities(physical.inv_mass, nodes, c)
-    geometry = Geometry(np.zeros(len(rows), np.int64), np.zeros(len(rows), bool),
-                        np.zeros(len(rows), np.int64), np.ones(len(rows)), contacts.rest[rows],
-                        np.column_stack([body[nodes[:, 0]], body[nodes[:, 3]]]))
-    return Friction(rows, phi, pushed, Contacts(nodes, c, n, np.zeros(len(rows)), params,
-                                                geometry), count, mobility, [])
+    return Friction(rows, phi, pushed, Contacts(nodes, c, n, np.zeros(len(rows)), params, None),
+                    count, mobility, [])
 
 
 def rub(physical, friction, v):
@@ -149,20 +156,17 @@ def rub(physical, friction, v):
     return v, friction._replace(passes=passes)
 
 
-def check_replayed(replayed, end, h, tolerance):
-    """Refuse a step whose replay does not end where the forward did: one the forward took in
-    halves (a surface carried through another), or whose active set came out otherwise. The
-    replay's solves start from zero, the forward's from the last step's change, so the two
-    agree to about the CG ``tolerance``: allowed a thousand times that, relative to the
-    fastest speed."""
-    x_out, v_out = replayed
+def check_solved(replayed, end, h, tolerance):
+    """Refuse a step whose replay does not end where the forward did (body_contact
+    .check_replayed): one the forward took in halves (a surface carried through another), or
+    whose active set came out otherwise. The replay's solves start from zero, the forward's
+    from the last step's change, so the two agree to about the CG ``tolerance``: allowed a
+    thousand times that, relative to the fastest speed."""
     allowed = max(1e-9, 1e3 * tolerance) * max(1.0, float(np.abs(end[1]).max()))
-    if not (np.abs(v_out - end[1]).max() <= allowed
-            and np.abs(x_out - end[0]).max() <= h * allowed):
-        raise SceneError("integrator", "implicit_euler", "took a step with body-body contact "
-                         "that the gradient cannot follow (taken in halves, or its contacts "
-                         "changed within the solve's tolerance): try a smaller dt or a tighter "
-                         "cg_tolerance")
+    check_replayed(replayed, end, h, allowed, "took a step under implicit_euler with body-body "
+                   "contact that the gradient cannot follow (taken in halves, or its contacts "
+                   "changed within the solve's tolerance): try a smaller dt or a tighter "
+                   "cg_tolerance")
 
 
 # ---- the adjoint ------------------------------------------------------------------------------
@@ -199,17 +203,26 @@ def adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, solver):
     return out_x, out_v
 
 
+class SolveBars(NamedTuple):
+    """The cotangents of a solve's contact set, gathered on the way back before they go to the
+    positions and masses (linearization_vjp)."""
+
+    weights: np.ndarray       # (K, 4)
+    normal: np.ndarray        # (K, 3)
+    gap: np.ndarray           # (K,)
+    coefficient: np.ndarray   # (K,) of h^2 k
+
+
 def contact_bars(contacts):
-    """Zeroed cotangents of a contact set's weights, normals, gaps and coefficients."""
+    """Zeroed SolveBars of a contact set."""
     count = len(contacts.nodes)
-    return Bars(np.zeros((count, 4)), np.zeros((count, 3)), np.zeros(count),
-                np.zeros(count), np.zeros(0), np.zeros(count), np.zeros(0))
+    return SolveBars(np.zeros((count, 4)), np.zeros((count, 3)), np.zeros(count),
+                     np.zeros(count))
 
 
 def friction_vjp(physical, replayed, v_bar, bars, x_bar, h, bar):
     """Back through the friction passes and the pushes they took (end_friction); returns the
-    cotangent of v_K; the gaps' share goes to x_bar and the contacts' ``bars`` (its
-    ``depth`` field holds the gap's, its ``mobility`` the coefficient's)."""
+    cotangent of v_K; the gaps' share goes to x_bar and the contacts' SolveBars ``bars``."""
     friction = replayed.friction
     rows, contacts = friction.rows, friction.contacts
     count = len(rows)
@@ -225,7 +238,7 @@ def friction_vjp(physical, replayed, v_bar, bars, x_bar, h, bar):
                   0.5 * rub_bars.kinetic)
     pressing = friction.phi < 0.0
     coefficient = replayed.iterations[-1].contacts.coefficient[rows]
-    bars.mobility[rows] += np.where(pressing, -friction.phi / h * pushed_bar, 0.0)
+    bars.coefficient[rows] += np.where(pressing, -friction.phi / h * pushed_bar, 0.0)
     phi_bar = np.where(pressing, -coefficient / h * pushed_bar, 0.0)
     # phi = n . sum_i c_i x_end[n_i] - R, x_end = x + h v_K
     along = gather(contacts.weights, contacts.nodes, replayed.x_before)
@@ -249,8 +262,8 @@ def penalty_vjp(contacts, lam, ddv, h, bars):
     lam_c, ddv_c = gather(c, nodes, lam), gather(c, nodes, ddv)   # sum_i c_i u_i
     j_lam, j_ddv = dot(n, lam_c), dot(n, ddv_c)
     push = -k * g / h
-    bars.mobility[rows] += -g / h * j_lam - j_lam * j_ddv
-    bars.depth[rows] += -k / h * j_lam
+    bars.coefficient[rows] += -g / h * j_lam - j_lam * j_ddv
+    bars.gap[rows] += -k / h * j_lam
     bars.normal[rows] += (push[:, None] * lam_c - k[:, None] * (j_ddv[:, None] * lam_c
                                                                  + j_lam[:, None] * ddv_c))
     n_lam = np.einsum("kjc,kc->kj", lam[nodes], n)
@@ -260,11 +273,11 @@ def penalty_vjp(contacts, lam, ddv, h, bars):
 
 
 def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
-    """Back through linearize_contacts for the contacts whose cotangents ``bars`` holds (gap in
-    ``depth``, coefficient in ``mobility``): the coefficient's masses and stencil, the gap's
+    """Back through linearize_contacts for the contacts whose cotangents ``bars`` (SolveBars)
+    holds: the coefficient's masses and stencil, the gap's
     estimate and stencil, the stencil's and normal's closest points. Returns the estimate's
     cotangent; the start's is added to x_bar."""
-    rows = np.flatnonzero((bars.mobility != 0.0) | (bars.depth != 0.0)
+    rows = np.flatnonzero((bars.coefficient != 0.0) | (bars.gap != 0.0)
                           | np.any(bars.weights != 0.0, axis=1) | np.any(bars.normal != 0.0,
                                                                             axis=1))
     estimate_bar = np.zeros_like(x)
@@ -275,14 +288,14 @@ def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
     k = contacts.coefficient[rows]
     e = x + h * (v + dv)
     # k = STIFFNESS / sum_i c_i^2 w_i
-    k_bar = bars.mobility[rows]
+    k_bar = bars.coefficient[rows]
     shared = -k * k / STIFFNESS * k_bar
     c_bar = bars.weights[rows] + 2.0 * shared[:, None] * c * inv
     inv_bar = np.zeros(len(x))
     np.add.at(inv_bar, nodes.ravel(), (shared[:, None] * c * c).ravel())
     bar.mass += np.where(physical.free, -inv_bar * physical.inv_mass ** 2, 0.0)
     # g = n . sum_i c_i e_i - R
-    g_bar = bars.depth[rows]
+    g_bar = bars.gap[rows]
     n_bar = bars.normal[rows] + g_bar[:, None] * gather(c, nodes, e)
     c_bar += g_bar[:, None] * np.einsum("kjc,kc->kj", e[nodes], n)
     np.add.at(estimate_bar, nodes.ravel(), (c[:, :, None] * (g_bar[:, None] * n)[:, None, :])
@@ -310,9 +323,6 @@ def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
 def stencil_branches(shape, c, n, e4, s4):
     """The branches narrow_phase/solve.stencil took: an edge pair's normal from the start (the
     step passed it through), a point's face, its closest-point region, the face normal's side."""
-    if np.any((shape != POINT_TRIANGLE) & (shape != EDGE_EDGE)):
-        raise SceneError("bodies", "balls", "touch other particles under implicit_euler, "
-                         "which gradients do not follow yet")
     point = shape == POINT_TRIANGLE
     w, region = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3])
     face = point & (w[:, 0] > 0.0) & (w[:, 1] > 0.0) & (w[:, 2] > 0.0)
