@@ -23,8 +23,8 @@ from .body_contact import check_replayed, far_from_bodies, respond, respond_vjp
 from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
-from .implicit_bodies import (adjoint as bodies_adjoint, check_solved, replay as bodies_replay,
-                              touches_bodies)
+from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
+                              replay as bodies_replay, touches_bodies)
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
@@ -236,17 +236,17 @@ class ImplicitEulerAdjoint(Adjoint):
         v = aim(physical, x, v, h)
         bodies = touches_bodies(physical, h, start, end)
         if len(start) == 3 and touches_planes(physical, h, start, end):
-            if bodies:
-                raise SceneError("bodies", "contact", "touch each other in a step where they "
-                                 "also touch a terrain under implicit_euler, which gradients "
-                                 "do not follow yet (the explicit methods' do)")
             if holds(physical):
                 raise SceneError("attachments", "hard", "hold bodies that touch a terrain "
                                  "under implicit_euler, which gradients do not follow yet: "
                                  "give the attachments a stiffness")
             kind, terrain, dampers = start[2]
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
-            _, _, _, replayed = replay(physical, h, x, v, dampers, kind, terrain, iterations)
+            penalty = PenaltyStep(physical, h, x, v, iterations) if bodies else None
+            x_out, v_out, _, replayed = replay(physical, h, x, v, dampers, kind, terrain,
+                                               iterations, penalty)
+            if bodies:
+                check_solved((x_out, v_out), end, h, self.integrator.cg_tolerance)
             x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,
                                                              v_bar, carried, bar)
         elif bodies:

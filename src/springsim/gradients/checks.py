@@ -9,9 +9,9 @@ deforming meshes under the explicit methods (contact.py); body-body contact of s
 every integrator, and of balls with balls and particles under the explicit methods
 (body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than given a gradient
 that leaves a force out: contact with curved, moving or deforming terrains under implicit_euler,
-hard attachments on bodies that touch a terrain or each other under implicit_euler, a step in
-which bodies touch each other and a terrain at once under implicit_euler, and ball contact there
-(adjoints.py refuses these at that step), self contact, and the wind on balls. A terrain the
+hard attachments on bodies that touch a terrain or each other under implicit_euler, and ball
+contact there (adjoints.py and implicit_bodies.py refuse these at that step), self contact, and
+the wind on balls. A terrain the
 adjoint does not follow may be in the scene as long as no particle comes within its contact band
 during the run (``contact_check``); under implicit_euler balls may be, and touch the terrains the
 adjoint follows (a ball is a particle whose terrain offset is its radius), as long as none comes

@@ -24,8 +24,10 @@ and normals, and through the stencils' closest points (complex step, as body_con
 estimate's and the start's positions. The active set, the closest-point regions and the
 sides are the branches the run took.
 
-Covered: point-triangle and edge-edge contacts of two bodies' surfaces. A step in which
-particles also touch a terrain, or balls touch anything, is refused (checks.py, adjoints.py).
+Covered: point-triangle and edge-edge contacts of two bodies' surfaces. In a step in which
+particles also touch a terrain, the terrain replay (implicit_contact.py) takes the contacts
+beside its constraints through ``PenaltyStep``. Balls touching anything are refused (checks.py,
+``refuse_balls``).
 """
 from typing import NamedTuple
 
@@ -43,6 +45,7 @@ from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights
                            dot4, far_from_bodies,
                            gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
                            respond, respond_vjp, surface_params)
+from .pins import place, release
 from .solve import estimate, iteration_vjp, newton_rhs
 
 
@@ -121,7 +124,7 @@ def replay(physical, integrator, solver, h, x, v):
     v_after = v_end.copy()
     if len(friction.rows):
         v_after, friction = rub(physical, friction, v_end)
-    x_end = x + h * v_after
+    x_end, v_after = place(physical, x + h * v_after, v_after)   # the post-step pass's start
     x_out, v_out, response = respond(physical, x_end, v_after, x)
     return x_out, v_out, Replay(iterations, x_before, v_end, friction, x_end, v_after, response)
 
@@ -177,6 +180,7 @@ def adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, solver):
     start_bar = np.zeros_like(x)
     if replayed.response is not None:
         x_bar, v_bar, start_bar = respond_vjp(physical, replayed.response, x_bar, v_bar, bar)
+    release(physical, x_bar, v_bar)      # the pins on paths were placed before the pass
     out_x = start_bar + x_bar            # x' = x + h v_after
     v_after_bar = v_bar + h * x_bar
     v_end_bar = v_after_bar
@@ -365,3 +369,80 @@ def solve_stencil(shape, flipped, face, region, sign, e4, s4):
         chosen = np.where(flipped[edge, None], start, d)
         normal[edge] = chosen / np.sqrt(dot(chosen, chosen))[:, None]
     return weights, normal
+
+
+# ---- with terrain contact in the same step (implicit_contact.py's replay takes these) -----------
+
+class PenaltyStep:
+    """A step's penalty contacts as the terrain replay (implicit_contact.replay) takes them,
+    beside its constraints: the contact set, linearized each Newton iteration, its matrix and
+    right-hand side for the active set of each solve, and its friction after the solve."""
+
+    def __init__(self, physical, h, x, v, requested):
+        self.physical, self.h, self.x, self.v = physical, h, x, v
+        arrays = physical.bodies.arrays
+        none = np.empty((0, 2), np.int64)
+        self.contacts = find_solve_contacts(arrays, np.ascontiguousarray(x),
+                                            np.ascontiguousarray(v), h, kept_surface_pairs(x),
+                                            OwnPairs(none, none))
+        self.needed = newton_iterations_needed(arrays, self.contacts, np.ascontiguousarray(v),
+                                               h, requested)
+        self.rhs = np.zeros_like(x)
+        self.iterations = []   # [Linearized], the active set of the iteration's last solve
+
+    def linearize(self, dv):
+        """Linearize the contacts about x + h (v + dv); returns their right-hand side."""
+        self.rhs = np.zeros_like(self.x)
+        linearize_contacts(self.physical.bodies.arrays, self.contacts, self.x, self.v,
+                           np.ascontiguousarray(dv), self.h, self.rhs)
+        return self.rhs
+
+    def matrix(self, active=None):
+        """sum_active h^2 k J^T J as a sparse (3P, 3P) matrix (the active set ``active``, or
+        the present one)."""
+        return penalty_matrix(self.contacts, self.contacts.active if active is None else active,
+                              len(self.x))
+
+    def update(self, ddv):
+        """update_active_contacts after a solve: whether the active set changed (the
+        right-hand side follows it)."""
+        return update_active_contacts(self.contacts, self.h, np.ascontiguousarray(ddv),
+                                      self.rhs) > 0
+
+    def keep(self, dv, first, ddv):
+        refuse_balls(self.contacts)
+        self.iterations.append(Linearized(dv, first, copy_contacts(self.contacts), ddv))
+
+    def with_active(self, k, active):
+        """Iteration k's contacts with the active set ``active``."""
+        return self.iterations[k].contacts._replace(active=active)
+
+
+def penalty_matrix(contacts, active, count):
+    from scipy import sparse
+
+    rows = np.flatnonzero(active)
+    nodes, c, n = contacts.nodes[rows], contacts.weights[rows], contacts.normal[rows]
+    columns = (3 * nodes[:, :, None] + np.arange(3)[None, None, :]).reshape(len(rows), 12)
+    values = (c[:, :, None] * n[:, None, :]).reshape(len(rows), 12)
+    jacobian = sparse.csr_matrix((values.ravel(), columns.ravel(),
+                                  np.arange(0, 12 * len(rows) + 1, 12)),
+                                 shape=(len(rows), 3 * count))
+    return (jacobian.T @ sparse.diags(contacts.coefficient[rows]) @ jacobian).tocsr()
+
+
+def penalty_end(physical, penalty, h, x, v_end):
+    """The friction after the solve (end_friction, rub) on v_K: (v after it, Friction)."""
+    x_before = x + h * v_end
+    friction = end_friction(physical, penalty.iterations[-1].contacts, x_before, h)
+    if len(friction.rows):
+        v_end, friction = rub(physical, friction, v_end)
+    return v_end, friction, x_before
+
+
+def penalty_end_vjp(physical, penalty, friction, x_before, v_after_bar, x_bar, h, bar, bars):
+    """friction_vjp for the terrain replay's end: the cotangent of v_K."""
+    if not len(friction.rows):
+        return v_after_bar
+    holder = Replay(penalty.iterations, x_before, None, friction, None, None, None)
+    return friction_vjp(physical, holder, v_after_bar, bars, x_bar, h, bar)

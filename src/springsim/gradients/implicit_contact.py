@@ -26,6 +26,11 @@ differentiated as the function of the last solve's impulses and velocities it is
 step leaves (``c_out``) is carried into the next step's matrix, so the backward pass carries its
 cotangent from step to step (adjoints.ImplicitEulerAdjoint).
 
+Where bodies touch each other in the same step, their penalty contacts (implicit_bodies
+.PenaltyStep) are in every solve's matrix and right-hand side, with the active set each solve
+had, their friction comes after the Newton iterations and the post-step pass after the impacts;
+the adjoint gives each solve's and each update's cotangents their share.
+
 The gradient is of the exactly solved step: the forward's CG stops at its tolerance, and the
 difference is of that order (docs/guide/gradients.md).
 """
@@ -40,7 +45,10 @@ from .contact import along, impacts, impacts_vjp, plane_distance
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
 from .attachments import attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp
-from .pins import pin_blocks, pin_blocks_vjp
+from .body_contact import respond, respond_vjp
+from .implicit_bodies import (contact_bars, linearization_vjp, penalty_end, penalty_end_vjp,
+                              penalty_matrix, penalty_vjp)
+from .pins import pin_blocks, pin_blocks_vjp, place, release
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
@@ -140,6 +148,7 @@ class Solve(NamedTuple):
     kind: np.ndarray      # the constraints it had
     c: np.ndarray         # (P,) the friction dampers in its matrix
     ddv: np.ndarray       # (P, 3) its solution
+    active: object = None   # (K,) bool: the penalty contacts active in it (none: no bodies)
 
 
 class Update(NamedTuple):
@@ -154,6 +163,7 @@ class Update(NamedTuple):
     sliding: np.ndarray
     released: np.ndarray  # contacts it released (c -> 0)
     grown: np.ndarray     # free particles it made contacts (c = 0)
+    active: object = None   # the penalty contacts active in the solve before it
 
 
 class Iteration(NamedTuple):
@@ -163,6 +173,16 @@ class Iteration(NamedTuple):
     c_start: np.ndarray   # (P,) the dampers the matrix starts with (after any cap)
     steps: list           # [Solve, Update, Solve, ..., (Update)] in order
     c_end: np.ndarray     # the dampers it leaves
+    cap_active: object = None   # the penalty contacts active when the cap was taken
+
+
+class Bodies(NamedTuple):
+    """The body-body contacts of a step with terrain contact too (implicit_bodies.py)."""
+
+    penalty: object       # implicit_bodies.PenaltyStep
+    friction: object      # implicit_bodies.Friction after the solve
+    x_before: np.ndarray  # x + h v_K, before that friction
+    response: object      # body_contact.Response of the post-step pass, or None
 
 
 class Replay(NamedTuple):
@@ -172,6 +192,7 @@ class Replay(NamedTuple):
     restored: np.ndarray  # particles whose approach speed the end restored
     impacts: list         # contact.impacts' record
     end: tuple            # (x, v) before the impact pass
+    bodies: object = None   # Bodies: the penalty contacts' part, when bodies touched too
 
 
 def diagonal_blocks(physical, x_k, v_k, h):
@@ -214,9 +235,11 @@ def friction_terms(kind, normal, c, u0):
     return matrix, share
 
 
-def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterations):
-    """The step as the forward took it (module doc), each solve exact. Returns (x', v', the
-    dampers it leaves, Replay)."""
+def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterations,
+           penalty=None):
+    """The step as the forward took it (module doc), each solve exact; with ``penalty`` (an
+    implicit_bodies.PenaltyStep) the bodies' penalty contacts in every solve, their friction
+    after it and the post-step pass. Returns (x', v', the dampers it leaves, Replay)."""
     constraints, continues = find_constraints(physical, x, v, h, previous_kind, previous_terrain)
     kind = constraints.kind.copy()
     normal = constraints.normal.copy()
@@ -226,38 +249,62 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     c = np.where(continues, c_memory, 0.0)
     dv = np.zeros_like(x)
     record = []
+    if penalty is not None:
+        iterations = penalty.needed
+
+    def active():
+        return None if penalty is None else penalty.contacts.active.copy()
+
     for k in range(iterations):
         first = k == 0
         x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
         matrix = system_matrix(physical, x_k, v_k, h)
         b_sp = newton_rhs(physical, h, x, v, dv, first)
+        if penalty is not None:
+            penalty.linearize(dv)
+
+        def full():
+            """The matrix and right-hand side with the penalty contacts active now."""
+            if penalty is None:
+                return matrix, b_sp
+            return matrix + penalty.matrix(), b_sp + penalty.rhs
+
         u0 = v + dv
         blocks = diagonal_blocks(physical, x_k, v_k, h)
         cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
+        cap_active = active()
         if first:   # remembered_friction_in_cone
-            *cap, lowered = capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c)
+            *cap, lowered = capped_dampers(physical, constraints, kind, blocks, full()[1], u0, c)
             c = c.copy()
             c[cap[0]] = lowered
         c_start = c.copy()
         steps = []
-        ddv = solve_step(physical, constraints, kind, matrix, b_sp, u0, c)
-        steps.append(Solve(kind.copy(), c.copy(), ddv))
+        ddv = solve_step(physical, constraints, kind, *full(), u0, c)
+        steps.append(Solve(kind.copy(), c.copy(), ddv, active()))
         for _ in range(MAX_CONTACT_UPDATES):
-            update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind, matrix,
-                                                  blocks, b_sp, u0, c, ddv)
-            steps.append(update)
+            solved_with = active()
+            update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind,
+                                                  full()[0], blocks, full()[1], u0, c, ddv)
+            steps.append(update._replace(active=solved_with))
+            bodies_changed = penalty is not None and penalty.update(ddv)
             moved = np.sum(np.abs(c_new[update.index] - c[update.index])
                            * np.maximum(update.slip, SLIP_SPEED))
             total = np.sum(physical.friction[terrain[update.index]] * update.impulse)
-            changed = grew or len(update.released) > 0
+            changed = grew or len(update.released) > 0 or bodies_changed
             c = c_new
             if not (changed or moved > FRICTION_SETTLED * total):
                 break
-            ddv = solve_step(physical, constraints, kind, matrix, b_sp, u0, c)
-            steps.append(Solve(kind.copy(), c.copy(), ddv))
-        record.append(Iteration(dv, first, cap, c_start, steps, c.copy()))
+            ddv = solve_step(physical, constraints, kind, *full(), u0, c)
+            steps.append(Solve(kind.copy(), c.copy(), ddv, active()))
+        record.append(Iteration(dv, first, cap, c_start, steps, c.copy(), cap_active))
+        if penalty is not None:
+            penalty.keep(dv, first, ddv)
         dv = dv + ddv
     v_k = v + dv
+    bodies = None
+    if penalty is not None:   # the penalty contacts' friction, then x from v again
+        v_k, friction, x_before = penalty_end(physical, penalty, h, x, v_k)
+        bodies = Bodies(penalty, friction, x_before, None)
     x_end = x + h * v_k
     # restore_impact_speeds
     contact = np.nonzero(kind == CONTACT)[0]
@@ -269,8 +316,11 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     v_end = v_k.copy()
     v_end[restored] += (approach[restore] - end_n[restore])[:, None] * n[restore]
     x_out, v_out, found = impacts(physical, x_end, v_end)
+    if bodies is not None:   # the pins on paths placed, then the post-step pass
+        x_out, v_out, response = respond(physical, *place(physical, x_out, v_out), x)
+        bodies = bodies._replace(response=response)
     return x_out, v_out, c, Replay(constraints, continues, record, restored, found,
-                                   (x_end, v_end))
+                                   (x_end, v_end), bodies)
 
 
 def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
@@ -397,8 +447,13 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
     (x', v', the dampers the step leaves); the parameters' share is added to ``bar``."""
     constraints = record.constraints
     normal = constraints.normal
-    x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
     out_x, out_v = np.zeros_like(x), np.zeros_like(x)
+    bodies = record.bodies
+    if bodies is not None and bodies.response is not None:
+        x_bar, v_bar, start_bar = respond_vjp(physical, bodies.response, x_bar, v_bar, bar)
+        release(physical, x_bar, v_bar)
+        out_x += start_bar
+    x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
     floor_bar = np.zeros(len(x))
     # restore_impact_speeds: v_k + (v . n - v_k . n) n
     vk_bar = v_end_bar.copy()
@@ -407,15 +462,33 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
         gn = rowdot(vk_bar[rows], normal[rows])
         vk_bar[rows] -= gn[:, None] * normal[rows]
         out_v[rows] += gn[:, None] * normal[rows]
-    # x' = x + h v_k, v_k = v + dv
+    # x' = x + h v_k, v_k = v + dv (with the penalty contacts' friction between)
     out_x += x_end_bar
     vk_bar += h * x_end_bar
+    penalty, last = None, None
+    if bodies is not None:
+        penalty = bodies.penalty
+        last = contact_bars(penalty.iterations[-1].contacts)
+        vk_bar = penalty_end_vjp(physical, penalty, bodies.friction, bodies.x_before, vk_bar,
+                                 out_x, h, bar, last)
     out_v += vk_bar
     dv_bar = vk_bar
     c_bar = c_bar.copy()
-    for it in reversed(record.iterations):
+    for k in reversed(range(len(record.iterations))):
+        it = record.iterations[k]
+        bodies_k = None
+        if penalty is not None:
+            bars = last if k == len(record.iterations) - 1 else contact_bars(
+                penalty.iterations[k].contacts)
+            bodies_k = (penalty, k, bars)
         dv_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar,
-                                          floor_bar, out_x, out_v, bar)
+                                          floor_bar, out_x, out_v, bar, bodies_k)
+        if bodies_k is not None:   # the contacts linearized about x + h (v + dv_k)
+            estimate_bar = linearization_vjp(physical, penalty.iterations[k].contacts, x, v,
+                                             it.dv, h, bodies_k[2], out_x, bar)
+            out_x += estimate_bar
+            out_v += h * estimate_bar
+            dv_bar = dv_bar + h * estimate_bar
     c_memory_bar = np.where(record.continues, c_bar, 0.0)
     # every particle that was a contact at some solve (made or released within the step too)
     floor_vjp(physical, constraints, np.nonzero(floor_bar)[0], floor_bar, h, out_x, out_v)
@@ -423,9 +496,11 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
 
 
 def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_bar, out_x,
-                      out_v, bar):
+                      out_v, bar, bodies=None):
     """One Newton iteration backwards (module doc); returns the cotangents of its starting dv
-    and dampers."""
+    and dampers. ``bodies``: (implicit_bodies.PenaltyStep, this iteration's number, its
+    contacts' SolveBars) when penalty contacts took part: each solve's and update's matrix and
+    right-hand side had those active then."""
     first, dv = it.first, it.dv
     x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
     u0 = v + dv
@@ -435,19 +510,38 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     weights = np.zeros((len(x), 3, 3))   # cotangent of each diagonal block (stiffness, cap)
     ddv_bar = dv_bar.copy()              # dv_next = dv + the last solve's ddv
     steps = it.steps
+
+    def with_penalty(active):
+        """(the matrix with the penalty contacts ``active``, those contacts) or (matrix, None)."""
+        if bodies is None:
+            return matrix, None
+        contacts = bodies[0].with_active(bodies[1], active)
+        return matrix + penalty_matrix(contacts, active, len(x)), contacts
+
     for j in reversed(range(len(steps))):
         step = steps[j]
+        full, contacts = with_penalty(step.active)
         if isinstance(step, Solve):
-            solve_adjoint(physical, h, (x_k, v_k), matrix, constraints, step, u0, ddv_bar,
-                          b_bar, u0_bar, c_bar, floor_bar, (xk_bar, vk_bar), bar)
+            lam = solve_adjoint(physical, h, (x_k, v_k), full, constraints, step, u0, ddv_bar,
+                                b_bar, u0_bar, c_bar, floor_bar, (xk_bar, vk_bar), bar)
+            if contacts is not None:   # its matrix's cotangent -lam ddv^T, its rhs's lam
+                penalty_vjp(contacts, lam, step.ddv, h, bodies[2])
             ddv_bar = np.zeros_like(x)
         else:
             ddv_before = steps[j - 1].ddv
-            update_adjoint(physical, h, (x_k, v_k), matrix, constraints, step, u0, ddv_before,
-                           c_bar, ddv_bar, b_bar, u0_bar, weights, (xk_bar, vk_bar), bar)
+            g_r = update_adjoint(physical, h, (x_k, v_k), full, constraints, step, u0,
+                                 ddv_before, c_bar, ddv_bar, b_bar, u0_bar, weights,
+                                 (xk_bar, vk_bar), bar)
+            if contacts is not None and g_r is not None:   # R = A ddv - b: g_r ddv^T, -g_r
+                penalty_vjp(contacts, -g_r, ddv_before, h, bodies[2])
     if first and len(it.cap[0]):
-        cap_adjoint(physical, h, (x_k, v_k), constraints, it.cap, c_bar, b_bar, u0_bar,
+        cap_bar = np.zeros_like(x)   # the cap read the right-hand side with the contacts
+        cap_adjoint(physical, h, (x_k, v_k), constraints, it.cap, c_bar, cap_bar, u0_bar,
                     floor_bar, weights, u0, bar)
+        b_bar += cap_bar
+        _, contacts = with_penalty(it.cap_active)
+        if contacts is not None:
+            penalty_vjp(contacts, cap_bar, np.zeros_like(x), h, bodies[2])
     diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar)
     wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
     pin_blocks_vjp(physical, h, weights, bar)
@@ -469,7 +563,8 @@ def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar,
                   c_bar, floor_bar, estimate_bar, bar):
     """ddv = solve(A_sp + C(c), b_sp - c T u0, z(floor, u0)): lambda = (Q^T A Q)^-1 Q^T ddv_bar
     (A symmetric), then b's cotangent is lambda, A's -lambda ddv^T, z's (I - S)(ddv_bar -
-    A lambda). ``estimate``: (x_k, v_k), with their cotangents ``estimate_bar``."""
+    A lambda). ``estimate``: (x_k, v_k), with their cotangents ``estimate_bar``. Returns
+    lambda (the penalty contacts in A and b take their share from it: iteration_adjoint)."""
     kind, c, ddv = step.kind, step.c, step.ddv
     contact = np.nonzero(kind == CONTACT)[0]
     normal = constraints.normal
@@ -487,16 +582,18 @@ def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar,
     gap_bar = rowdot(rest[contact], n)
     floor_bar[contact] += gap_bar
     u0_bar[contact] -= gap_bar[:, None] * n
+    return lam
 
 
 def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, c_bar, ddv_bar,
                    b_bar, u0_bar, weights, estimate_bar, bar):
-    """The dampers chosen from the solve before (constraints.coulomb_damping), backwards."""
+    """The dampers chosen from the solve before (constraints.coulomb_damping), backwards.
+    Returns the cotangent g_r of the reaction R = A ddv - b they read (None if none)."""
     c_bar[update.released] = 0.0
     c_bar[update.grown] = 0.0
     index = update.index
     if not len(index):
-        return
+        return None
     g = c_bar[index]
     c_before = update.c_before[index]
     slip, impulse, stiff, sliding = update.slip, update.impulse, update.stiffness, update.sliding
@@ -525,6 +622,7 @@ def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, 
     b_bar -= g_r
     # stiffness = (tr B - n^T B n) / 2
     weights[index] += 0.5 * stiff_bar[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
+    return g_r
 
 
 def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, floor_bar, weights,
