@@ -5,10 +5,11 @@ contacts, Coulomb friction that sticks and slides, the stuck contacts' sliding t
 cube overhanging another's corner (every closest-point region of a point against a triangle),
 both for the bodies' contact friction and restitution among other keys; the stacked cubes on a
 plane (terrain and body contact in each step); the upper cube landing on a layer that pins carry
-along a path; two balls thrown onto a cube and into each other; and two cubes far apart, where
-rk4's adjoint takes its kernels. Under implicit_euler the cubes' cases run too (the solve's
-penalty springs beside the terrain constraints, their friction, the post-step pass); balls
-touching anything are refused there in one line (test_gradients_balls.py)."""
+along a path; two balls thrown onto a cube and into each other (the balls' contact keys too);
+and two cubes far apart, where rk4's adjoint takes its kernels. Under implicit_euler the cubes'
+cases run too (the solve's penalty springs beside the terrain constraints, their friction, the
+post-step pass); balls touching anything are refused there in one line
+(test_gradients_balls.py)."""
 import numpy as np
 import pytest
 
@@ -81,7 +82,9 @@ def balls():
     thrown into the first."""
     one = Ball(position=(0.01, 1.201, 0.02), velocity=(0.3, -1.0, 0.0), radius=0.2, mass=2.0)
     two = Ball(position=(0.35, 1.29, 0.06), velocity=(-0.6, -0.5, 0.0), radius=0.15, mass=1.0)
-    return Scene(bodies=[lower_cube(), Balls(balls=[one, two])], terrains=[], drag=0.1)
+    balls = Balls(balls=[one, two], ball_restitution=0.7, particle_restitution=0.3,
+                  particle_friction=0.2)
+    return Scene(bodies=[lower_cube(), balls], terrains=[], drag=0.1)
 
 
 def apart():
@@ -97,7 +100,9 @@ SCENES = {"stacked": (stacked, CUBE_KEYS), "overhang": (overhang, CUBE_KEYS),
           "on-moving-pins": (on_moving_pins, ["bodies.1.velocity", "bodies.1.friction",
                                               "gravity", "bodies.0.structural.ks"]),
           "balls": (balls, ["bodies.1.balls.0.velocity", "bodies.1.balls.1.mass",
-                            "bodies.0.structural.ks", "gravity", "drag"]),
+                            "bodies.0.structural.ks", "gravity", "drag",
+                            "bodies.1.ball_restitution", "bodies.1.particle_restitution",
+                            "bodies.1.particle_friction"]),
           "apart": (apart, ["bodies.1.velocity", "bodies.0.structural.ks"])}
 
 

@@ -510,12 +510,29 @@ def respond_vjp(physical, response, x_bar, v_bar, bar):
     geometry_vjp(contacts, response.x, bars, x_bar)
     inv = physical.inv_mass
     bar.mass += np.where(physical.free, -bars.inv_mass * inv * inv, 0.0)
-    surface = contacts.geometry.pair[:, 0] >= 0   # a ball's keys are not parameters
-    for side in (0, 1):   # a surface contact's keys are the means of its two bodies'
+    keys_vjp(physical, contacts, bars, bar)
+    return x_bar, v_bar, start_bar
+
+
+def keys_vjp(physical, contacts, bars, bar):
+    """The contacts' restitution and kinetic friction cotangents to the keys they came from
+    (surface_params, ball_contacts): a surface contact's are the means of its two bodies', a
+    ball-ball contact's restitution the mean of the two balls', a ball-particle contact's the
+    ball's own."""
+    surface = contacts.geometry.pair[:, 0] >= 0
+    for side in (0, 1):
         bodies = contacts.geometry.pair[surface, side]
         np.add.at(bar.body_friction, bodies, 0.5 * bars.kinetic[surface])
         np.add.at(bar.body_restitution, bodies, 0.5 * bars.restitution[surface])
-    return x_bar, v_bar, start_bar
+    slot = physical.bodies.ball_slot
+    ball, partner = slot[contacts.nodes[~surface, 0]], slot[contacts.nodes[~surface, 1]]
+    both = partner >= 0
+    restitution, kinetic = bars.restitution[~surface], bars.kinetic[~surface]
+    np.add.at(bar.ball_restitution, ball[both], 0.5 * restitution[both])
+    np.add.at(bar.ball_restitution, partner[both], 0.5 * restitution[both])
+    np.add.at(bar.particle_restitution, ball[~both], restitution[~both])
+    # static and kinetic friction are one key: only the kinetic is differentiable
+    np.add.at(bar.particle_friction, ball[~both], kinetic[~both])
 
 
 def overlap_vjp(physical, response, x_bar, start_bar, bars):

@@ -38,7 +38,7 @@ COVERED = {"inv_mass", "gravity", "drag", "rest_length", "spring_group", "group_
            "spring_runs", "run_rest_length", "loose_springs", "terrain_friction",
            "terrain_restitution", "wind_settings", "wind_keys", "wind_modes", "pin_stiffness",
            "pin_damping", "attachment_stiffness", "attachment_damping", "body_friction",
-           "body_restitution"}
+           "body_restitution", "ball_restitution", "particle_restitution", "particle_friction"}
 # The model's work space, which the kernels write while they run (model.py): not a parameter
 WORK_SPACE = {"clock", "motion_pose"}
 MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
@@ -46,7 +46,8 @@ MAX_GROUPS = 2 ** 31 - 1   # spring_group is int32
 DIFFERENTIABLE = ("ks", "kd", "rest", "mass", "drag", "gravity", "friction", "restitution",
                   "wind_settings", "wind_keys", "wind_modes", "pin_stiffness", "pin_damping",
                   "attachment_stiffness", "attachment_damping", "body_friction",
-                  "body_restitution")
+                  "body_restitution", "ball_restitution", "particle_restitution",
+                  "particle_friction")
 
 
 def parameter(scene, name):

@@ -97,6 +97,21 @@ class Physical(NamedTuple):
         return self.bodies.restitution
 
     @property
+    def ball_restitution(self) -> np.ndarray:
+        """(N,) each ball's restitution against balls (ball-ball contacts take the mean)."""
+        return self.bodies.ball_restitution
+
+    @property
+    def particle_restitution(self) -> np.ndarray:
+        """(N,) and against particles."""
+        return self.bodies.particle_restitution
+
+    @property
+    def particle_friction(self) -> np.ndarray:
+        """(N,) its Coulomb friction against particles (static and kinetic alike)."""
+        return self.bodies.particle_friction
+
+    @property
     def inv_mass(self) -> np.ndarray:
         return np.where(self.free, 1.0 / self.mass, 0.0)
 
@@ -128,6 +143,9 @@ class Cotangents:
     attachment_damping: np.ndarray
     body_friction: np.ndarray
     body_restitution: np.ndarray
+    ball_restitution: np.ndarray
+    particle_restitution: np.ndarray
+    particle_friction: np.ndarray
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
