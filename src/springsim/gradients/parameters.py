@@ -115,7 +115,7 @@ class SceneValue:
             check_covered(self.key, built[0], built[1])
             span = taken[0] - taken[1]   # the step the values took, rounding included
             plus, minus = Physical.of(built[0]), Physical.of(built[1])
-            out.append(tuple((getattr(plus, name) - getattr(minus, name)) / span
+            out.append(tuple((plus.differentiable(name) - minus.differentiable(name)) / span
                              for name in DIFFERENTIABLE)
                        + ((built[0].initial_positions - built[1].initial_positions) / span,
                           (built[0].initial_velocities - built[1].initial_velocities) / span))

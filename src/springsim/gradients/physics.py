@@ -28,6 +28,14 @@ from .pins import pin_forces, pin_forces_vjp
 from .wind import wind_forces, wind_forces_vjp
 
 
+# The contact keys that are parameters, each a Cotangents field, with the Bodies field it is
+# (body_contact.py): the bodies' (B,), per contact body, and the balls' (N,), per ball
+CONTACT_KEYS = {"body_friction": "friction", "body_restitution": "restitution",
+                "ball_restitution": "ball_restitution",
+                "particle_restitution": "particle_restitution",
+                "particle_friction": "particle_friction"}
+
+
 class Physical(NamedTuple):
     """The differentiable numbers of a model, one per spring or particle."""
 
@@ -86,30 +94,12 @@ class Physical(NamedTuple):
                    arrays.attachment_stiffness.astype(float),
                    arrays.attachment_damping.astype(float), Bodies.of(arrays))
 
-    @property
-    def body_friction(self) -> np.ndarray:
-        """(B,) each contact body's kinetic Coulomb coefficient against other surfaces."""
-        return self.bodies.friction
-
-    @property
-    def body_restitution(self) -> np.ndarray:
-        """(B,) and its restitution."""
-        return self.bodies.restitution
-
-    @property
-    def ball_restitution(self) -> np.ndarray:
-        """(N,) each ball's restitution against balls (ball-ball contacts take the mean)."""
-        return self.bodies.ball_restitution
-
-    @property
-    def particle_restitution(self) -> np.ndarray:
-        """(N,) and against particles."""
-        return self.bodies.particle_restitution
-
-    @property
-    def particle_friction(self) -> np.ndarray:
-        """(N,) its Coulomb friction against particles (static and kinetic alike)."""
-        return self.bodies.particle_friction
+    def differentiable(self, name: str) -> np.ndarray:
+        """The numbers Cotangents.``name`` is the cotangent of: a field, or one of the contact
+        keys kept in ``bodies`` (CONTACT_KEYS)."""
+        if name in CONTACT_KEYS:
+            return getattr(self.bodies, CONTACT_KEYS[name])
+        return getattr(self, name)
 
     @property
     def inv_mass(self) -> np.ndarray:
@@ -149,7 +139,8 @@ class Cotangents:
 
     @classmethod
     def zeros(cls, physical: Physical) -> "Cotangents":
-        return cls(*(np.zeros_like(getattr(physical, f.name), dtype=float) for f in fields(cls)))
+        return cls(*(np.zeros_like(physical.differentiable(f.name), dtype=float)
+                     for f in fields(cls)))
 
 
 class Springs(NamedTuple):
