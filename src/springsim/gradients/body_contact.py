@@ -196,16 +196,28 @@ def point_geometry(x4, face, region, sign):
     return weights, normal, gap
 
 
+def segment_parameters(a, b, c, q):
+    """(s, t, inside): closest_points.closest_on_segments' unclamped branch for the segments
+    a-b and c-q (rows, real or complex), and whether that is the branch taken with both closest
+    points strictly inside their segments, the only case in which two edges touch."""
+    d1, d2, r = b - a, q - c, a - c
+    aa, ee, ff = dot(d1, d1), dot(d2, d2), dot(d2, r)
+    cc, bb = dot(d1, r), dot(d1, d2)
+    denominator = aa * ee - bb * bb
+    with np.errstate(divide="ignore", invalid="ignore"):   # parallel edges: no closest pair
+        s = (bb * ff - cc * ee) / denominator
+        t = (bb * s + ff) / ee
+        inside = ((np.real(aa) > 0.0) & (np.real(ee) > 0.0) & (np.real(denominator) > 0.0)
+                  & (0.0 < np.real(s)) & (np.real(s) < 1.0) & (0.0 < np.real(t))
+                  & (np.real(t) < 1.0))
+    return s, t, inside
+
+
 def edge_geometry(x4, sign):
     """(weights, normal, gap) of edge-edge stencils (segments x4[:, 0]-x4[:, 1] and
-    x4[:, 2]-x4[:, 3]) whose closest points are inside both (the only ones that touch):
-    closest_points.closest_on_segments' unclamped branch."""
+    x4[:, 2]-x4[:, 3]) whose closest points are inside both (segment_parameters)."""
     a, b, c, q = x4[:, 0], x4[:, 1], x4[:, 2], x4[:, 3]
-    d1, d2, r = b - a, q - c, a - c
-    aa, ee, f = dot(d1, d1), dot(d2, d2), dot(d2, r)
-    cc, bb = dot(d1, r), dot(d1, d2)
-    s = (bb * f - cc * ee) / (aa * ee - bb * bb)
-    t = (bb * s + f) / ee
+    s, t, _ = segment_parameters(a, b, c, q)
     d = ((1.0 - s)[:, None] * a + s[:, None] * b - (1.0 - t)[:, None] * c - t[:, None] * q)
     distance = np.sqrt(dot(d, d))
     weights = np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
@@ -318,15 +330,8 @@ def edge_contacts(bodies, x, start, pairs):
     nodes = np.column_stack([edges[e], edges[f]])
     x4 = x[nodes]
     a, b, c, q = x4[:, 0], x4[:, 1], x4[:, 2], x4[:, 3]
-    d1, d2, r = b - a, q - c, a - c
-    aa, ee, ff = dot(d1, d1), dot(d2, d2), dot(d2, r)
-    cc, bb = dot(d1, r), dot(d1, d2)
-    denominator = aa * ee - bb * bb
-    with np.errstate(divide="ignore", invalid="ignore"):   # parallel edges: no closest pair
-        s = (bb * ff - cc * ee) / denominator
-        t = (bb * s + ff) / ee
-        inside = (aa > 0.0) & (ee > 0.0) & (denominator > 0.0) & (0.0 < s) & (s < 1.0) \
-            & (0.0 < t) & (t < 1.0)
+    s, t, inside = segment_parameters(a, b, c, q)
+    with np.errstate(invalid="ignore"):   # parallel edges: NaN, and never inside
         d = ((1.0 - s)[:, None] * a + s[:, None] * b - (1.0 - t)[:, None] * c - t[:, None] * q)
         distance = np.sqrt(dot(d, d))
         s4 = start[nodes]

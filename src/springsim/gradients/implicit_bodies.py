@@ -42,7 +42,7 @@ from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
 from ..errors import SceneError
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights, cross, dot,
-                           dot4, far_from_bodies,
+                           dot4, far_from_bodies, point_geometry, segment_parameters,
                            gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
                            respond, respond_vjp, surface_params)
 from .pins import place, release
@@ -97,36 +97,27 @@ def copy_contacts(contacts):
 
 def replay(physical, integrator, solver, h, x, v):
     """The step as the forward took it (module doc): (x', v', Replay)."""
-    arrays = physical.bodies.arrays
-    none = np.empty((0, 2), np.int64)
-    contacts = find_solve_contacts(arrays, np.ascontiguousarray(x), np.ascontiguousarray(v), h,
-                                   kept_surface_pairs(x), OwnPairs(none, none))
-    needed = newton_iterations_needed(arrays, contacts, np.ascontiguousarray(v), h,
-                                      integrator.newton_iterations)
-    dv, iterations = np.zeros_like(x), []
-    for k in range(needed):
+    penalty = PenaltyStep(physical, h, x, v, integrator.newton_iterations)
+    dv = np.zeros_like(x)
+    for k in range(penalty.needed):
         first = k == 0
         x_k, v_k = estimate(x, v, dv, h, first)
-        rhs = np.ascontiguousarray(newton_rhs(physical, h, x, v, dv, first))
+        rhs = newton_rhs(physical, h, x, v, dv, first)
         solver.assemble(physical, x_k, v_k, h)
-        linearize_contacts(arrays, contacts, x, v, dv, h, rhs)
-        ddv = solver.solve(rhs, contacts)
+        penalty.linearize(dv)
+        ddv = solver.solve(np.ascontiguousarray(rhs + penalty.rhs), penalty.contacts)
         for _ in range(MAX_CONTACT_UPDATES):
-            if update_active_contacts(contacts, h, ddv, rhs) == 0:
+            if not penalty.update(ddv):
                 break
-            ddv = solver.solve(rhs, contacts)
-        refuse_balls(contacts)
-        iterations.append(Linearized(dv, first, copy_contacts(contacts), ddv))
+            ddv = solver.solve(np.ascontiguousarray(rhs + penalty.rhs), penalty.contacts)
+        penalty.keep(dv, first, ddv)
         dv = dv + ddv
     v_end = v + dv
-    x_before = x + h * v_end
-    friction = end_friction(physical, iterations[-1].contacts, x_before, h)
-    v_after = v_end.copy()
-    if len(friction.rows):
-        v_after, friction = rub(physical, friction, v_end)
+    v_after, friction, x_before = penalty_end(physical, penalty, h, x, v_end)
     x_end, v_after = place(physical, x + h * v_after, v_after)   # the post-step pass's start
     x_out, v_out, response = respond(physical, x_end, v_after, x)
-    return x_out, v_out, Replay(iterations, x_before, v_end, friction, x_end, v_after, response)
+    return x_out, v_out, Replay(penalty.iterations, x_before, v_end, friction, x_end, v_after,
+                                response)
 
 
 def refuse_balls(contacts):
@@ -183,11 +174,10 @@ def adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, solver):
     release(physical, x_bar, v_bar)      # the pins on paths were placed before the pass
     out_x = start_bar + x_bar            # x' = x + h v_after
     v_after_bar = v_bar + h * x_bar
-    v_end_bar = v_after_bar
     last = replayed.iterations[-1]
     geometry_bars = contact_bars(last.contacts)
-    if len(replayed.friction.rows):
-        v_end_bar = friction_vjp(physical, replayed, v_after_bar, geometry_bars, out_x, h, bar)
+    v_end_bar = friction_vjp(physical, replayed.friction, last.contacts, replayed.x_before,
+                             v_after_bar, geometry_bars, out_x, h, bar)
     out_v = v_end_bar.copy()             # v_K = v + dv_K
     dv_bar = v_end_bar
     for k in reversed(range(len(replayed.iterations))):
@@ -224,10 +214,12 @@ def contact_bars(contacts):
                      np.zeros(count))
 
 
-def friction_vjp(physical, replayed, v_bar, bars, x_bar, h, bar):
-    """Back through the friction passes and the pushes they took (end_friction); returns the
-    cotangent of v_K; the gaps' share goes to x_bar and the contacts' SolveBars ``bars``."""
-    friction = replayed.friction
+def friction_vjp(physical, friction, linearized, x_before, v_bar, bars, x_bar, h, bar):
+    """Back through the friction passes and the pushes they took (end_friction: the last
+    iteration's contacts ``linearized``, their gaps at ``x_before``); returns the cotangent of
+    v_K; the gaps' share goes to x_bar and the contacts' SolveBars ``bars``."""
+    if not len(friction.rows):
+        return v_bar
     rows, contacts = friction.rows, friction.contacts
     count = len(rows)
     rub_bars = Bars(np.zeros((count, 4)), np.zeros((count, 3)), np.zeros(count),
@@ -241,14 +233,14 @@ def friction_vjp(physical, replayed, v_bar, bars, x_bar, h, bar):
         np.add.at(bar.body_friction, physical.bodies.body[contacts.nodes[:, side]],
                   0.5 * rub_bars.kinetic)
     pressing = friction.phi < 0.0
-    coefficient = replayed.iterations[-1].contacts.coefficient[rows]
+    coefficient = linearized.coefficient[rows]
     bars.coefficient[rows] += np.where(pressing, -friction.phi / h * pushed_bar, 0.0)
     phi_bar = np.where(pressing, -coefficient / h * pushed_bar, 0.0)
     # phi = n . sum_i c_i x_end[n_i] - R, x_end = x + h v_K
-    along = gather(contacts.weights, contacts.nodes, replayed.x_before)
+    along = gather(contacts.weights, contacts.nodes, x_before)
     bars.normal[rows] += phi_bar[:, None] * along
     bars.weights[rows] += rub_bars.weights + phi_bar[:, None] * np.einsum(
-        "kjc,kc->kj", replayed.x_before[contacts.nodes], contacts.normal)
+        "kjc,kc->kj", x_before[contacts.nodes], contacts.normal)
     bars.normal[rows] += rub_bars.normal
     end_bar = np.zeros_like(v_bar)
     np.add.at(end_bar, contacts.nodes.ravel(), (contacts.weights[:, :, None] * (
@@ -344,24 +336,12 @@ def solve_stencil(shape, flipped, face, region, sign, e4, s4):
     kind = np.result_type(e4, s4)
     weights = np.zeros((len(shape), 4), dtype=kind)
     normal = np.zeros((len(shape), 3), dtype=kind)
-    if point.any():
-        p, a, b, c = (e4[point, i] for i in range(4))
-        w, _ = closest_weights(p, a, b, c, region[point])
-        weights[point] = np.concatenate([np.ones_like(w[:, :1]), -w], axis=1)
-        area = cross(b - a, c - a)
-        d = p - w[:, 0:1] * a - w[:, 1:2] * b - w[:, 2:3] * c
-        with np.errstate(divide="ignore", invalid="ignore"):
-            normal[point] = np.where(face[point, None],
-                                     sign[point, None] * area / np.sqrt(dot(area, area))[:, None],
-                                     d / np.sqrt(dot(d, d))[:, None])
+    if point.any():   # the post-step pass's stencil, at the estimate
+        weights[point], normal[point], _ = point_geometry(e4[point], face[point], region[point],
+                                                          sign[point])
     edge = ~point
     if edge.any():
-        a, b, c, q = (e4[edge, i] for i in range(4))
-        d1, d2, r = b - a, q - c, a - c
-        aa, ee, ff = dot(d1, d1), dot(d2, d2), dot(d2, r)
-        cc, bb = dot(d1, r), dot(d1, d2)
-        s = (bb * ff - cc * ee) / (aa * ee - bb * bb)
-        t = (bb * s + ff) / ee
+        s, t, _ = segment_parameters(*(e4[edge, i] for i in range(4)))
         w = np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
         weights[edge] = w
         d = np.einsum("kj,kjc->kc", w, e4[edge])
@@ -438,11 +418,3 @@ def penalty_end(physical, penalty, h, x, v_end):
     if len(friction.rows):
         v_end, friction = rub(physical, friction, v_end)
     return v_end, friction, x_before
-
-
-def penalty_end_vjp(physical, penalty, friction, x_before, v_after_bar, x_bar, h, bar, bars):
-    """friction_vjp for the terrain replay's end: the cotangent of v_K."""
-    if not len(friction.rows):
-        return v_after_bar
-    holder = Replay(penalty.iterations, x_before, None, friction, None, None, None)
-    return friction_vjp(physical, holder, v_after_bar, bars, x_bar, h, bar)

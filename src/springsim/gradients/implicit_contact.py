@@ -46,7 +46,7 @@ from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
 from .attachments import attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp
 from .body_contact import respond, respond_vjp
-from .implicit_bodies import (contact_bars, linearization_vjp, penalty_end, penalty_end_vjp,
+from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, penalty_end,
                               penalty_matrix, penalty_vjp)
 from .pins import pin_blocks, pin_blocks_vjp, place, release
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
@@ -469,8 +469,8 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
     if bodies is not None:
         penalty = bodies.penalty
         last = contact_bars(penalty.iterations[-1].contacts)
-        vk_bar = penalty_end_vjp(physical, penalty, bodies.friction, bodies.x_before, vk_bar,
-                                 out_x, h, bar, last)
+        vk_bar = friction_vjp(physical, bodies.friction, penalty.iterations[-1].contacts,
+                              bodies.x_before, vk_bar, last, out_x, h, bar)
     out_v += vk_bar
     dv_bar = vk_bar
     c_bar = c_bar.copy()
