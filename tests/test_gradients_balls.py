@@ -1,6 +1,7 @@
 """Gradients with balls (a ball is a particle whose terrain offset is its radius): a ball thrown
 onto a plane and one into a bowl, against central finite differences of the forward run under
-each integrator with an adjoint (restitution, friction, gravity, the ball's mass and velocity);
+each integrator with an adjoint (restitution, friction, gravity, the ball's mass and velocity),
+and onto the plane against a gusty wind;
 under implicit_euler, balls that come within reach of each other are refused in one line, as
 its adjoint does not follow ball contact yet (the explicit methods' does:
 test_gradients_bodies.py)."""
@@ -55,10 +56,16 @@ def test_balls_that_meet_are_refused():
                  duration=0.1, integrator="implicit_euler", dt=0.01)
 
 
-def test_wind_on_balls_is_refused():
-    from springsim.wind import Wind
-    scene = on_plane()
-    scene.wind = Wind(velocity=(3.0, 0.0, 0.0))
-    with pytest.raises(SceneError, match="wind = 'on': blows on balls"):
-        gradient(scene, weighted_squares, ["gravity"], duration=0.02, integrator="rk4",
-                 dt=0.002)
+@pytest.mark.parametrize("integrator", list(STEPS))
+def test_a_ball_landing_in_a_wind_matches_finite_differences(integrator):
+    """The ball thrown onto the plane against a gusty wind: the air's drag on a sphere beside
+    the plane's contact (gradients/wind.py)."""
+    from springsim.wind import Gusts, Wind
+
+    def windy():
+        scene = on_plane()
+        scene.wind = Wind(velocity=(-6.0, 1.0, 2.0), density=1.2, drag=0.8,
+                          gusts=Gusts(strength=0.3, length=0.5, seed=1))
+        return scene
+    assert_gradients_match(windy, integrator, ["wind.velocity", "wind.drag",
+                                               "terrains.0.friction", "bodies.0.balls.0.mass"])

@@ -1,10 +1,11 @@
 """Gradients through the wind (gradients/wind.py) against central finite differences of the
 forward run: the wind's velocity, keys and settings, and the model's parameters with the wind
-blowing, under each integrator with an adjoint, on a cube, a cloth and a cube sliding on a
-tilted plane."""
+blowing, under each integrator with an adjoint, on a cube, a cloth, a cube sliding on a
+tilted plane and balls beside a cloth (each ball a sphere in the air)."""
 import numpy as np
 import pytest
 
+from springsim.bodies.balls import Ball, Balls
 from springsim.bodies.cloth import Cloth
 from springsim.scene import Scene
 from springsim.springs import SpringParameters
@@ -42,10 +43,22 @@ def keyed():
     return scene
 
 
-SCENES = {"cube": lambda: gusty(small_scene()), "flag": flag, "keyed": keyed}
+def balls_in_wind():
+    """The flag and two balls of different sizes thrown up beside it, in its gusty wind."""
+    scene = flag()
+    scene.bodies.append(Balls(balls=[
+        Ball(position=(2.0, 2.0, 0.0), velocity=(0.5, 3.0, -1.0), radius=0.2, mass=0.3),
+        Ball(position=(-2.0, 1.0, 0.5), velocity=(-1.0, 2.0, 4.0), radius=0.35, mass=0.5)]))
+    return scene
+
+
+SCENES = {"cube": lambda: gusty(small_scene()), "flag": flag, "keyed": keyed,
+          "balls": balls_in_wind}
 NAMES = {"cube": WIND_KEYS, "flag": ["wind.velocity", "bodies.0.structural.ks"],
          "keyed": ["wind.keyframes.1.velocity", "wind.keyframes.1.time",
-                   "terrains.0.friction"]}
+                   "terrains.0.friction"],
+         "balls": ["wind.velocity", "wind.density", "wind.drag", "wind.gusts.strength",
+                   "wind.gusts.length", "bodies.1.balls.0.velocity", "bodies.1.balls.1.mass"]}
 
 
 @pytest.mark.parametrize("case", list(SCENES))
@@ -56,7 +69,7 @@ def test_wind_gradients_match_finite_differences(integrator, case):
 
 def test_wind_terms_match_the_kernels():
     """The NumPy wind (the adjoint's) against the simulation's kernels, force and blocks, on a
-    gusty cloth at an arbitrary time."""
+    gusty cloth and two balls at an arbitrary time."""
     from springsim.gradients.physics import Physical
     from springsim.gradients.clock import FORCE_TIME
     from springsim.gradients.wind import wind_blocks, wind_forces
@@ -64,7 +77,7 @@ def test_wind_terms_match_the_kernels():
     from springsim.model import build_model
     from springsim.wind import add_wind_forces, add_wind_with_jacobian
 
-    model = build_model(flag())
+    model = build_model(balls_in_wind())
     rng = np.random.default_rng(4)
     x = model.initial_positions + rng.normal(0.0, 0.02, model.initial_positions.shape)
     v = rng.normal(0.0, 1.0, x.shape)

@@ -18,9 +18,11 @@ depend on its four particles' positions through the closest points; their Jacobi
 by the complex step (f(x + i s e_j) has imaginary part s df/dx_j to rounding, for a step s far
 below rounding: Squire and Trapp 1998), on the closed forms of the region the run took.
 
-Not parameters: the bodies' contact restitution and friction, and the balls'; the masses are
-(each contact's reduced mass and each particle's share of an impulse). A body's own contacts
-(self-collision) are refused by checks.py.
+Parameters: the bodies' contact restitution and friction, and the balls'; the masses (each
+contact's reduced mass and each particle's share of an impulse). A self-colliding body's own
+contacts (a cloth folded onto itself) are the same stencils, found by the same search with the
+forward's rule for which of its own pairs count (broad_phase/surfaces.may_touch_triangle:
+not a point and a triangle or two edges that share a surface edge).
 """
 from typing import NamedTuple
 
@@ -54,6 +56,9 @@ class Bodies(NamedTuple):
     particle_friction: np.ndarray
     correction: np.ndarray
     arrays: object = None   # the model's arrays, which the forward's broad phase searches
+    collide: bool = False   # whether anything can touch: two bodies' surfaces, one that
+                            # collides with itself, or a ball
+    own: bool = False       # whether some body's surface collides with itself
 
     @classmethod
     def of(cls, arrays) -> "Bodies":
@@ -67,12 +72,10 @@ class Bodies(NamedTuple):
                   ("ball_restitution", "particle_restitution", "particle_friction",
                    "position_correction")]
         ints[2], ints[3] = ints[2].reshape(-1, 3), ints[3].reshape(-1, 2)
-        return cls(*ints, *floats, *balls, *tables, arrays)
-
-    @property
-    def collide(self) -> bool:
-        """Whether anything can touch: surfaces of two bodies, or a ball."""
-        return bool(len(self.balls)) or len(np.unique(self.body[self.points])) > 1
+        surface_bodies = np.unique(ints[0][ints[2][:, 0]])
+        own = bool(np.any(np.asarray(arrays.body_self_collision, bool)[surface_bodies]))
+        collide = bool(len(balls[0])) or len(np.unique(ints[0][ints[1]])) > 1 or own
+        return cls(*ints, *floats, *balls, *tables, arrays, collide, own)
 
 
 NO_BODIES = Bodies(np.empty(0, np.int64), np.empty(0, np.int64), np.empty((0, 3), np.int64),
@@ -280,12 +283,13 @@ def empty_part():
                                np.empty(0), np.empty(0), np.empty((0, 2), np.int64)))
 
 
-def near_pairs(bodies, x, beyond):
+def near_pairs(bodies, x, beyond, own_only=False):
     """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge rows,
-    lower first)) of two bodies closer than their rest distance plus ``beyond`` (m): the
-    forward's own broad phase (collision/broad_phase/surfaces.py), searched afresh. A body's
-    own pairs are left out (checks.py refuses self contact)."""
-    return surface_pairs(bodies.arrays, np.ascontiguousarray(x), beyond, NO_SELF_CONTACT)
+    lower first)) closer than their rest distance plus ``beyond`` (m): the forward's own broad
+    phase (collision/broad_phase/surfaces.py), searched afresh, with a self-colliding body's
+    own pairs, or only those (``own_only``)."""
+    return surface_pairs(bodies.arrays, np.ascontiguousarray(x),
+                         NO_SELF_CONTACT if own_only else beyond, beyond)
 
 
 def point_contacts(bodies, x, start, pairs):
@@ -657,13 +661,13 @@ def check_replayed(replayed, end, h, allowed, what):
         raise SceneError("bodies", "contact", what)
 
 
-def far_from_bodies(physical, h, start, end) -> bool:
-    """Whether no body contact can have acted in the step from ``start`` to ``end``: nothing
-    touched at the step's end before the correction, which moved each particle by less than
-    the rest distance plus what it slid. Tested at the end with every reach doubled and the
-    fastest particle's step added, generously."""
+def far_from_bodies(physical, h, start, end, own_only=False) -> bool:
+    """Whether no body contact (only a body's own, with ``own_only``) can have acted in the
+    step from ``start`` to ``end``: nothing touched at the step's end before the correction,
+    which moved each particle by less than the rest distance plus what it slid. Tested at the
+    end with every reach doubled and the fastest particle's step added, generously."""
     bodies = physical.bodies
-    if not bodies.collide:
+    if not (bodies.own if own_only else bodies.collide):
         return True
     x = end[0]
     slack = 2.0 * h * float(np.sqrt(np.max(dot(start[1], start[1]), initial=0.0)
@@ -671,9 +675,12 @@ def far_from_bodies(physical, h, start, end) -> bool:
     if len(bodies.triangles):
         # 2 rest distances (a contact's reach) and the correction's move (a rest distance
         # and what the particle slid)
-        points, edges = near_pairs(bodies, x, 2.0 * float(bodies.thickness.max()) + slack)
+        points, edges = near_pairs(bodies, x, 2.0 * float(bodies.thickness.max()) + slack,
+                                   own_only)
         if len(points) or len(edges):
             return False
+    if own_only:
+        return True
     for a in bodies.balls:
         distance = np.sqrt(dot(x - x[a], x - x[a]))
         close = distance < 2.0 * (bodies.radius[a] + bodies.radius) + slack

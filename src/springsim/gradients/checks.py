@@ -2,16 +2,16 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag, the wind on surfaces (wind.py), pins that hold, move or are soft
+dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are soft
 (pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
 implicit_contact.py), and with spheres, bowls and meshes, with terrains moving rigidly and with
 deforming meshes under the explicit methods (contact.py); body-body contact of surfaces under
-every integrator, and of balls with balls and particles under the explicit methods
-(body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than given a gradient
-that leaves a force out: contact with curved, moving or deforming terrains under implicit_euler,
-hard attachments on bodies that touch a terrain or each other under implicit_euler, and ball
-contact there (adjoints.py and implicit_bodies.py refuse these at that step), self contact, and
-the wind on balls. A terrain the
+every integrator, a self-colliding body's own contacts and those of balls with balls and
+particles under the explicit methods (body_contact.py, implicit_bodies.py). Not yet covered, so
+refused rather than given a gradient that leaves a force out: contact with curved, moving or
+deforming terrains under implicit_euler, hard attachments on bodies that touch a terrain or
+each other under implicit_euler, and a body's own contacts and ball contact there (adjoints.py
+and implicit_bodies.py refuse these at that step). A terrain the
 adjoint does not follow may be in the scene as long as no particle comes within its contact band
 during the run (``contact_check``); under implicit_euler balls may be, and touch the terrains the
 adjoint follows (a ball is a particle whose terrain offset is its radius), as long as none comes
@@ -20,7 +20,6 @@ within reach of another ball or particle (``ball_check``).
 import numpy as np
 
 from ..errors import SceneError
-from ..wind import ON
 from .adjoints import ADJOINTS
 from .clock import STEP_START, at_time
 
@@ -30,13 +29,6 @@ def check_supported(simulation) -> None:
     if name not in ADJOINTS:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
                          + ", ".join(ADJOINTS))
-    arrays = simulation.model.arrays
-    if arrays.balls.shape[0] and arrays.wind_settings[ON]:
-        raise SceneError("wind", "on", "blows on balls, which gradients do not follow yet")
-    for body, self_colliding in enumerate(arrays.body_self_collision):
-        if self_colliding:
-            raise SceneError(f"bodies.{body}.self_collision", True, "gradients do not follow "
-                             "self contact yet: set it to false")
 
 
 def step_checks(simulation, physical=None):

@@ -24,7 +24,9 @@ and normals, and through the stencils' closest points (complex step, as body_con
 estimate's and the start's positions. The active set, the closest-point regions and the
 sides are the branches the run took.
 
-Covered: point-triangle and edge-edge contacts of two bodies' surfaces. In a step in which
+Covered: point-triangle and edge-edge contacts of two bodies' surfaces. A self-colliding
+body's own contacts are refused at the step where they come within reach
+(``refuse_own_contact``). In a step in which
 particles also touch a terrain, the terrain replay (implicit_contact.py) takes the contacts
 beside its constraints through ``PenaltyStep``. Balls touching anything are refused (checks.py,
 ``refuse_balls``).
@@ -78,6 +80,19 @@ class Replay(NamedTuple):
     x_end: np.ndarray       # (P, 3) x + h v after the friction: the post-step pass's input
     v_after: np.ndarray
     response: object        # body_contact.Response or None
+
+
+def refuse_own_contact(physical, h, start, end, time) -> None:
+    """A self-colliding body whose own surfaces come within reach in the step: the forward
+    may have added its own pairs to the solve (collision/pair_lists/own_pairs.py), which the
+    replay does not follow yet."""
+    predicted = (start[0] + h * start[1], start[1])
+    if not (far_from_bodies(physical, h, start, end, own_only=True)
+            and far_from_bodies(physical, h, start, predicted, own_only=True)):
+        raise SceneError("self_collision", True, f"a body touches itself in the step from "
+                         f"t = {time:.6g} s under implicit_euler, which gradients do not "
+                         "follow yet (rk4 and the symplectic and explicit Euler methods do): "
+                         "use one of them, or set the body's self_collision to false")
 
 
 def touches_bodies(physical, h, start, end) -> bool:

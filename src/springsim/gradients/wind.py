@@ -11,8 +11,9 @@ corners' velocities; the gusts, sums of sines of the positions and the gust mode
 (mean wind, gust amplitude, 1/2 rho C_d, 1/2 rho C_f) as a function of the wind's keys and
 settings, by complex steps again.
 
-The wind's time is the force evaluation's (clock.py). Balls feel the wind too, but the
-adjoint refuses balls (checks.py), so only triangles are here.
+Balls feel the wind as spheres, 1/2 rho C_d pi r^2 |w| w with w the air's velocity relative to
+the ball's; their derivatives are written out (``ball_winds``). The wind's time is the force
+evaluation's (clock.py).
 """
 from typing import NamedTuple
 
@@ -222,11 +223,74 @@ def chain_back(physical, x, t, at: Triangles, corners_bar, w_bar, coefficients_b
     add_air_bar(physical, at.air, air_bar, bar)
 
 
+# --- balls --------------------------------------------------------------------------------------
+
+class BallWinds(NamedTuple):
+    """The balls' relative air velocities (wind.ball_wind) and what their forces are made of."""
+
+    balls: np.ndarray   # (N,) the balls' particles
+    w: np.ndarray       # (N, 3) m/s: the air's velocity relative to each ball
+    speed: np.ndarray   # (N,) |w|
+    area: np.ndarray    # (N,) pi r^2
+    air: Air
+
+
+def ball_winds(physical, x, v, t) -> BallWinds:
+    balls = physical.bodies.balls
+    air_now = air(physical, t)
+    w = (air_now.value[:3] + corner_gusts(physical, x[balls], air_now.value[3], t)
+         - v[balls])
+    return BallWinds(balls, w, np.sqrt(np.sum(w * w, axis=1)),
+                     np.pi * physical.bodies.radius[balls] ** 2, air_now)
+
+
+def ball_chain_back(physical, x, t, at: BallWinds, w_bar, drag_bar, x_bar, v_bar, bar) -> None:
+    """From the cotangents of the balls' relative air and of 1/2 rho C_d to x_bar, v_bar and the
+    wind's parameters (the gusts at the balls' positions)."""
+    v_bar[at.balls] -= w_bar
+    balls_bar = np.zeros((len(at.balls), 3))
+    amplitude_bar = gusts_vjp(physical, x[at.balls], at.air.value[3], t, w_bar, balls_bar, bar)
+    x_bar[at.balls] += balls_bar
+    add_air_bar(physical, at.air, np.concatenate([w_bar.sum(axis=0), [amplitude_bar],
+                                                  [drag_bar, 0.0]]), bar)
+
+
+def unit(at: BallWinds):
+    """w / |w| per ball, zero in still air (where the force and its derivatives vanish)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(at.speed[:, None] > 0.0, at.w / at.speed[:, None], 0.0)
+
+
+def ball_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
+    """g . d(F_balls)/d(everything): dF/dw = c A (|w| I + w w^T / |w|)."""
+    t = physical.clock[FORCE_TIME]
+    at = ball_winds(physical, x, v, t)
+    c, g_b, u = at.air.value[4], g[at.balls], unit(at)
+    along = np.sum(g_b * at.w, axis=1)
+    w_bar = (c * at.area)[:, None] * (at.speed[:, None] * g_b + along[:, None] * u)
+    drag_bar = float(np.sum(at.area * at.speed * along))
+    ball_chain_back(physical, x, t, at, w_bar, drag_bar, x_bar, v_bar, bar)
+
+
+def ball_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
+    """d(sum_i W_i : B_i)/d(everything), B_i = h c A (|w| I + w w^T / |w|) (wind.py's
+    add_ball_derivative)."""
+    t = physical.clock[FORCE_TIME]
+    at = ball_winds(physical, x, v, t)
+    c, u, q = at.air.value[4], unit(at), weights[at.balls]
+    trace = np.einsum("kii->k", q)
+    uqu = np.einsum("ki,kij,kj->k", u, q, u)
+    symmetric = np.einsum("kij,kj->ki", q + np.transpose(q, (0, 2, 1)), u)
+    w_bar = (h * c * at.area)[:, None] * (trace[:, None] * u + symmetric - uqu[:, None] * u)
+    drag_bar = float(np.sum(h * at.area * at.speed * (trace + uqu)))
+    ball_chain_back(physical, x, t, at, w_bar, drag_bar, x_bar, v_bar, bar)
+
+
 # --- what the adjoints call ---------------------------------------------------------------------
 
 def wind_forces(physical, x, v):
     """Every particle's wind force (N), (P, 3): each triangle's shared among its corners by
-    weight / 3 (wind.add_triangle_winds), at the wind's time."""
+    weight / 3 (wind.add_triangle_winds), and each ball's, at the wind's time."""
     out = np.zeros_like(x)
     if not blows(physical):
         return out
@@ -235,6 +299,9 @@ def wind_forces(physical, x, v):
     share = (physical.wind_weights / 3.0)[:, None] * force
     for j in range(3):
         np.add.at(out, physical.wind_triangles[:, j], share)
+    if len(physical.bodies.balls):
+        balls = ball_winds(physical, x, v, physical.clock[FORCE_TIME])
+        out[balls.balls] += (balls.air.value[4] * balls.area * balls.speed)[:, None] * balls.w
     return out
 
 
@@ -258,6 +325,8 @@ def wind_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
         np.sum(g_k * (found.normal_size * found.w_n)[:, None] * found.normal),
         np.sum(g_k * found.along_size[:, None] * found.tangential)])
     chain_back(physical, x, t, at, corners_bar, w_bar, coefficients_bar, x_bar, v_bar, bar)
+    if len(physical.bodies.balls):
+        ball_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
 
 
 def wind_blocks(physical, x, v, h):
@@ -276,6 +345,11 @@ def wind_blocks(physical, x, v, h):
     blocks *= (h * physical.wind_weights)[:, None, None]
     for j in range(3):
         np.add.at(out, physical.wind_triangles[:, j], blocks)
+    if len(physical.bodies.balls):
+        balls = ball_winds(physical, x, v, physical.clock[FORCE_TIME])
+        u = unit(balls)
+        size = h * balls.air.value[4] * balls.area * balls.speed
+        out[balls.balls] += size[:, None, None] * (np.eye(3) + u[:, :, None] * u[:, None, :])
     return out
 
 
@@ -302,6 +376,8 @@ def wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
     coefficients_bar = TWO_NINTHS * np.array([np.sum(found.normal_size * nqn),
                                               np.sum(found.along_size * (trace - nqn))])
     chain_back(physical, x, t, at, corners_bar, w_bar, coefficients_bar, x_bar, v_bar, bar)
+    if len(physical.bodies.balls):
+        ball_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar)
 
 
 def outer_weights(left, right):
