@@ -5,11 +5,11 @@ contacts, Coulomb friction that sticks and slides, the stuck contacts' sliding t
 cube overhanging another's corner (every closest-point region of a point against a triangle),
 both for the bodies' contact friction and restitution among other keys; the stacked cubes on a
 plane (terrain and body contact in each step); the upper cube landing on a layer that pins carry
-along a path; two balls thrown onto a cube and into each other (the balls' contact keys too);
-and two cubes far apart, where rk4's adjoint takes its kernels. Under implicit_euler the cubes'
-cases run too (the solve's penalty springs beside the terrain constraints, their friction, the
-post-step pass); balls touching anything are refused there in one line
-(test_gradients_balls.py)."""
+along a path; two balls thrown onto a cube and into each other (the balls' contact keys too),
+and two onto a cloth; and two cubes far apart, where rk4's adjoint takes its kernels. Under
+implicit_euler all but the last run too (the solve's penalty springs beside the terrain
+constraints, a ball's against particles and against a sheet's triangles at their closest points
+or at their centres and corners, their friction, the post-step pass)."""
 import numpy as np
 import pytest
 
@@ -87,6 +87,21 @@ def balls():
     return Scene(bodies=[lower_cube(), balls], terrains=[], drag=0.1)
 
 
+def balls_on_cloth():
+    """A ball larger than the cloth's triangles (it meets them at their centres and corners)
+    and a smaller one (at their closest points) thrown down onto a cloth pinned at its corners,
+    2 mm above it."""
+    from springsim.bodies.cloth import Cloth
+    from springsim.springs import SpringParameters
+    springs = SpringParameters(ks=2000.0, kd=5.0)
+    cloth = Cloth(particles_per_edge=5, width=1.0, height=1.0, particle_mass=0.2,
+                  structural=springs, shear=springs, bend=springs, self_collision=False)
+    big = Ball(position=(0.1, 0.402, 0.05), velocity=(0.3, -1.0, 0.0), radius=0.4, mass=1.0)
+    small = Ball(position=(-0.3, 0.102, -0.2), velocity=(-0.2, -1.0, 0.4), radius=0.1, mass=0.5)
+    balls = Balls(balls=[big, small], particle_restitution=0.3, particle_friction=0.4)
+    return Scene(bodies=[cloth, balls], terrains=[], drag=0.1)
+
+
 def apart():
     """The stacked cubes 3 m apart: they never touch."""
     scene = stacked()
@@ -103,11 +118,14 @@ SCENES = {"stacked": (stacked, CUBE_KEYS), "overhang": (overhang, CUBE_KEYS),
                             "bodies.0.structural.ks", "gravity", "drag",
                             "bodies.1.ball_restitution", "bodies.1.particle_restitution",
                             "bodies.1.particle_friction"]),
+          "balls-on-cloth": (balls_on_cloth, ["bodies.1.balls.0.velocity",
+                                              "bodies.1.balls.1.mass", "bodies.0.structural.ks",
+                                              "bodies.1.particle_friction", "gravity"]),
           "apart": (apart, ["bodies.1.velocity", "bodies.0.structural.ks"])}
 
 
 CASES = [(integrator, case) for integrator in STEPS for case in SCENES
-         if integrator != "implicit_euler" or case not in ("balls", "apart")]
+         if integrator != "implicit_euler" or case != "apart"]
 
 
 @pytest.mark.parametrize("integrator, case", CASES)

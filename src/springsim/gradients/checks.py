@@ -2,20 +2,18 @@
 run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
-dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are soft
-(pins.py) and attachments, soft or hard (attachments.py); contact with still planes (contact.py,
-implicit_contact.py), and with spheres, bowls and meshes, with terrains moving rigidly and with
-deforming meshes under the explicit methods (contact.py); body-body contact of surfaces under
-every integrator, a self-colliding body's own contacts and those of balls with balls and
-particles under the explicit methods (body_contact.py, implicit_bodies.py). Not yet covered, so
-refused rather than given a gradient that leaves a force out: contact with curved, moving or
-deforming terrains under implicit_euler, hard attachments on bodies that touch a terrain or
-each other under implicit_euler, and a body's own contacts and ball contact there (adjoints.py
-and implicit_bodies.py refuse these at that step). A terrain the
-adjoint does not follow may be in the scene as long as no particle comes within its contact band
-during the run (``contact_check``); under implicit_euler balls may be, and touch the terrains the
-adjoint follows (a ball is a particle whose terrain offset is its radius), as long as none comes
-within reach of another ball or particle (``ball_check``).
+dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are
+soft (pins.py) and attachments, soft or hard (attachments.py); contact with still planes
+(contact.py, implicit_contact.py), and with spheres, bowls and meshes, with terrains moving
+rigidly and with deforming meshes under the explicit methods (contact.py); body-body contact
+of surfaces and of balls with balls and particles under every integrator, and a
+self-colliding body's own contacts under the explicit methods (body_contact.py,
+implicit_bodies.py). Not yet covered, so refused rather than given a gradient that leaves a
+force out: contact with curved, moving or deforming terrains under implicit_euler, and there
+hard attachments on bodies that touch a terrain or each other and a body's contact with itself
+(adjoints.py and implicit_bodies.py refuse these at that step). A terrain the adjoint does not
+follow may be in the scene as long as no particle comes within its contact band during the
+run (``contact_check``).
 """
 import numpy as np
 
@@ -32,51 +30,9 @@ def check_supported(simulation) -> None:
 
 
 def step_checks(simulation, physical=None):
-    """The checks of every step's start that the scene needs (``contact_check``,
-    ``ball_check``), as one function ``check(step, (x, v))``; None if it needs none."""
-    checks = [check for check in (contact_check(simulation, physical), ball_check(simulation))
-              if check is not None]
-    if not checks:
-        return None
-
-    def check(step, state):
-        for one in checks:
-            one(step, state)
-    return check
-
-
-def ball_check(simulation):
-    """A function ``check(step, (x, v))`` that refuses a state in which a ball could touch
-    another ball or a particle of another body within the step: closer than the two radii plus
-    what their speeds cover in a step, a tenth of the ball's radius (the forward's search
-    slack) and the longest sheet triangle edge (a ball meets a cloth through its triangles,
-    anywhere between the corners); None without balls, or under the explicit methods, whose
-    ball contacts the adjoint follows."""
-    arrays = simulation.model.arrays
-    balls = arrays.balls.astype(np.int64)
-    if not len(balls) or simulation.integrator.name != "implicit_euler":
-        return None   # the explicit methods' ball contacts are followed (body_contact.py)
-    h, radius = simulation.dt, arrays.radius
-    sheet = arrays.sheet_triangles.astype(np.int64)
-
-    def check(step, state):
-        x, v = state[0], state[1]
-        speed = np.linalg.norm(v, axis=1)
-        edge = 0.0
-        if len(sheet):
-            corners = x[sheet]
-            edge = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max())
-        for a in balls:
-            reach = (radius[a] + radius + h * (speed[a] + speed) + 0.1 * radius[a] + edge)
-            near = np.linalg.norm(x - x[a], axis=1) < reach
-            near[a] = False
-            if near.any():
-                other = int(np.argmax(near))
-                raise SceneError("bodies", "balls", f"ball particle {int(a)} comes within "
-                                 f"reach of particle {other} at step {step}: gradients do not "
-                                 "follow ball contact under implicit_euler yet (balls may "
-                                 "touch the terrains only; the explicit methods follow it)")
-    return check
+    """The check of every step's start that the scene needs (``contact_check``), as one
+    function ``check(step, (x, v))``; None if it needs none."""
+    return contact_check(simulation, physical)
 
 
 def contact_check(simulation, physical=None):

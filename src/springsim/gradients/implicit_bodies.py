@@ -24,18 +24,20 @@ and normals, and through the stencils' closest points (complex step, as body_con
 estimate's and the start's positions. The active set, the closest-point regions and the
 sides are the branches the run took.
 
-Covered: point-triangle and edge-edge contacts of two bodies' surfaces. A self-colliding
-body's own contacts are refused at the step where they come within reach
-(``refuse_own_contact``). In a step in which
-particles also touch a terrain, the terrain replay (implicit_contact.py) takes the contacts
-beside its constraints through ``PenaltyStep``. Balls touching anything are refused (checks.py,
-``refuse_balls``).
+Covered: point-triangle and edge-edge contacts of two bodies' surfaces, and a ball's contacts
+with a particle, a sheet triangle (at its closest point, or at its centre and corners where
+the ball is larger than it) or another ball, with the ball's friction after the solve (none
+between two balls). A self-colliding body's own contacts are refused at the step where they
+come within reach (``refuse_own_contact``). In a step in which particles also touch a terrain,
+the terrain replay (implicit_contact.py) takes the contacts beside its constraints through
+``PenaltyStep``.
 """
 from typing import NamedTuple
 
 import numpy as np
 
-from ..collision.contact_sets import EDGE_EDGE, POINT_TRIANGLE, SolveContacts
+from ..collision.contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE,
+                                      PASSES, POINT_TRIANGLE, SolveContacts)
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.own_pairs import OwnPairs
 from ..collision.pair_lists.solve_pairs import kept_surface_pairs
@@ -135,24 +137,26 @@ def replay(physical, integrator, solver, h, x, v):
                                 response)
 
 
-def refuse_balls(contacts):
-    """Ball contacts of the solve are not followed yet (checks.ball_check refuses most before
-    the step)."""
-    surface = (contacts.shape == POINT_TRIANGLE) | (contacts.shape == EDGE_EDGE)
-    if np.any(contacts.active & ~surface):
-        raise SceneError("bodies", "balls", "touch other particles under implicit_euler, which "
-                         "gradients do not follow yet (the explicit methods' do)")
+def is_ball(shape):
+    return (shape == BALL_POINT) | (shape == BALL_TRIANGLE) | (shape == BALL_SAMPLE)
 
 
 def end_friction(physical, contacts, x_end, h):
-    """solve_friction.apply_contact_friction's contacts: the active ones, their gaps at x_end,
-    their pushes and parameters (surfaces: the means of the two bodies' keys)."""
-    rows = np.flatnonzero(contacts.active)
+    """solve_friction.apply_contact_friction's contacts: the active ones but two balls', their
+    gaps at x_end, their pushes and parameters (surfaces: the means of the two bodies' keys; a
+    ball against a particle or a sheet: the ball's particle friction)."""
+    bodies = physical.bodies
+    two_balls = (contacts.shape == BALL_POINT) & (bodies.ball_slot[contacts.nodes[:, 1]] >= 0)
+    rows = np.flatnonzero(contacts.active & ~two_balls)
     nodes, c, n = contacts.nodes[rows], contacts.weights[rows], contacts.normal[rows]
     phi = dot(gather(c, nodes, x_end), n) - contacts.rest[rows]
     pushed = contacts.coefficient[rows] * np.maximum(-phi, 0.0) / h
-    body = physical.bodies.body
-    params = surface_params(physical.bodies, body[nodes[:, 0]], body[nodes[:, 3]])
+    params = surface_params(bodies, bodies.body[nodes[:, 0]], bodies.body[nodes[:, 3]])
+    ball = is_ball(contacts.shape[rows])
+    friction = bodies.particle_friction[bodies.ball_slot[nodes[ball, 0]]]
+    params[ball] = np.column_stack([np.zeros_like(friction), friction, friction,
+                                    np.zeros_like(friction), np.ones_like(friction),
+                                    np.full_like(friction, PASSES)])
     count, mobility = mobilities(physical.inv_mass, nodes, c)
     return Friction(rows, phi, pushed, Contacts(nodes, c, n, np.zeros(len(rows)), params, None),
                     count, mobility, [])
@@ -244,9 +248,12 @@ def friction_vjp(physical, friction, linearized, x_before, v_bar, bars, x_bar, h
                                     v_bar, rub_bars)
     mobility_vjp(physical, contacts, friction.count, rub_bars)
     bar.mass += np.where(physical.free, -rub_bars.inv_mass * physical.inv_mass ** 2, 0.0)
+    bodies, ball = physical.bodies, is_ball(linearized.shape[rows])
     for side in (0, 3):   # a surface contact's friction is the mean of its two bodies'
-        np.add.at(bar.body_friction, physical.bodies.body[contacts.nodes[:, side]],
-                  0.5 * rub_bars.kinetic)
+        np.add.at(bar.body_friction, bodies.body[contacts.nodes[~ball, side]],
+                  0.5 * rub_bars.kinetic[~ball])
+    np.add.at(bar.particle_friction, bodies.ball_slot[contacts.nodes[ball, 0]],
+              rub_bars.kinetic[ball])
     pressing = friction.phi < 0.0
     coefficient = linearized.coefficient[rows]
     bars.coefficient[rows] += np.where(pressing, -friction.phi / h * pushed_bar, 0.0)
@@ -332,10 +339,11 @@ def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
 
 
 def stencil_branches(shape, c, n, e4, s4):
-    """The branches narrow_phase/solve.stencil took: an edge pair's normal from the start (the
-    step passed it through), a point's face, its closest-point region, the face normal's side."""
+    """The branches narrow_phase/solve.stencil took: the normal from the start (the step passed
+    the pair through), a point's face, its closest-point region, the face normal's side."""
     point = shape == POINT_TRIANGLE
-    w, region = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3])
+    with np.errstate(divide="ignore", invalid="ignore"):   # a ball-point's "triangle" is a point
+        w, region = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3])
     face = point & (w[:, 0] > 0.0) & (w[:, 1] > 0.0) & (w[:, 2] > 0.0)
     d, s = np.einsum("kj,kjc->kc", c, e4), np.einsum("kj,kjc->kc", c, s4)
     flipped = ~point & (dot(d, s) <= 0.0)
@@ -354,16 +362,41 @@ def solve_stencil(shape, flipped, face, region, sign, e4, s4):
     if point.any():   # the post-step pass's stencil, at the estimate
         weights[point], normal[point], _ = point_geometry(e4[point], face[point], region[point],
                                                           sign[point])
-    edge = ~point
-    if edge.any():
-        s, t, _ = segment_parameters(*(e4[edge, i] for i in range(4)))
-        w = np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
-        weights[edge] = w
-        d = np.einsum("kj,kjc->kc", w, e4[edge])
-        start = np.einsum("kj,kjc->kc", w, s4[edge])
-        chosen = np.where(flipped[edge, None], start, d)
-        normal[edge] = chosen / np.sqrt(dot(chosen, chosen))[:, None]
+    for rows, stencil_weights in ((shape == EDGE_EDGE, edge_weights),
+                                  (shape == BALL_TRIANGLE, ball_triangle_weights),
+                                  (shape == BALL_POINT, lambda e4, _: BALL_POINT_WEIGHTS),
+                                  (shape == BALL_SAMPLE, lambda e4, _: BALL_SAMPLE_WEIGHTS)):
+        if rows.any():
+            w = stencil_weights(e4[rows], region[rows]) * np.ones((rows.sum(), 1))
+            weights[rows] = w
+            normal[rows] = stencil_normal(w, e4[rows], s4[rows], flipped[rows])
     return weights, normal
+
+
+BALL_POINT_WEIGHTS = np.array([1.0, -1.0, 0.0, 0.0])
+BALL_SAMPLE_WEIGHTS = np.array([1.0, -1.0 / 3.0, -1.0 / 3.0, -1.0 / 3.0])
+
+
+def edge_weights(e4, _region):
+    s, t, _ = segment_parameters(*(e4[:, i] for i in range(4)))
+    return np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
+
+
+def ball_triangle_weights(e4, region):
+    w, _ = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3], region)
+    return np.concatenate([np.ones_like(w[:, :1]), -w], axis=1)
+
+
+def stencil_normal(w, e4, s4, flipped):
+    """d / |d|, d = sum_i c_i e_i, or the start's sum where the step passed the pair through;
+    up where the two are concentric (a ball about a point), as the forward chooses."""
+    d = np.einsum("kj,kjc->kc", w, e4)
+    start = np.einsum("kj,kjc->kc", w, s4)
+    chosen = np.where(flipped[:, None], start, d)
+    length = np.sqrt(dot(chosen, chosen))
+    apart = np.real(length) > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(apart[:, None], chosen / length[:, None], np.array([0.0, 1.0, 0.0]))
 
 
 # ---- with terrain contact in the same step (implicit_contact.py's replay takes these) -----------
@@ -405,7 +438,6 @@ class PenaltyStep:
                                       self.rhs) > 0
 
     def keep(self, dv, first, ddv):
-        refuse_balls(self.contacts)
         self.iterations.append(Linearized(dv, first, copy_contacts(self.contacts), ddv))
 
     def with_active(self, k, active):
