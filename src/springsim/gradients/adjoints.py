@@ -24,10 +24,10 @@ from .contact import far_from_terrains, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
-                              refuse_own_contact, replay as bodies_replay, touches_bodies)
+                              replay as bodies_replay, touches_bodies)
 from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
-from .clock import STEP_START, at_time
+from .clock import at_time
 from .pins import aim, place, release, soft
 from .wind import blows
 
@@ -234,8 +234,6 @@ class ImplicitEulerAdjoint(Adjoint):
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
         release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
         v = aim(physical, x, v, h)
-        if physical.bodies.own:
-            refuse_own_contact(physical, h, start, end, float(physical.clock[STEP_START]))
         bodies = touches_bodies(physical, h, start, end)
         if len(start) == 3 and touches_planes(physical, h, start, end):
             if holds(physical):

@@ -6,12 +6,12 @@ dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold
 soft (pins.py) and attachments, soft or hard (attachments.py); contact with still planes
 (contact.py, implicit_contact.py), and with spheres, bowls and meshes, with terrains moving
 rigidly and with deforming meshes under the explicit methods (contact.py); body-body contact
-of surfaces and of balls with balls and particles under every integrator, and a
-self-colliding body's own contacts under the explicit methods (body_contact.py,
-implicit_bodies.py). Not yet covered, so refused rather than given a gradient that leaves a
-force out: contact with curved, moving or deforming terrains under implicit_euler, and there
-hard attachments on bodies that touch a terrain or each other and a body's contact with itself
-(adjoints.py and implicit_bodies.py refuse these at that step). A terrain the adjoint does not
+of surfaces (a self-colliding body's own too) and of balls with balls and particles under
+every integrator (body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than
+given a gradient that leaves a force out: contact with curved, moving or deforming terrains
+under implicit_euler, and there hard attachments on bodies that touch a terrain or each other
+and a fold that closes within a step that touches a terrain (adjoints.py and
+implicit_contact.py refuse these at that step). A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
 run (``contact_check``).
 """

@@ -24,13 +24,15 @@ and normals, and through the stencils' closest points (complex step, as body_con
 estimate's and the start's positions. The active set, the closest-point regions and the
 sides are the branches the run took.
 
-Covered: point-triangle and edge-edge contacts of two bodies' surfaces, and a ball's contacts
-with a particle, a sheet triangle (at its closest point, or at its centre and corners where
-the ball is larger than it) or another ball, with the ball's friction after the solve (none
-between two balls). A self-colliding body's own contacts are refused at the step where they
-come within reach (``refuse_own_contact``). In a step in which particles also touch a terrain,
-the terrain replay (implicit_contact.py) takes the contacts beside its constraints through
-``PenaltyStep``.
+Covered: point-triangle and edge-edge contacts of two bodies' surfaces and of a self-colliding
+body's own (collision/pair_lists/own_pairs.py: those in contact at the step's start, and those
+an iteration's solve brings into contact, after which the forward solves that iteration again
+with them, as ``PenaltyStep.regrow`` does), and a ball's contacts with a particle, a sheet
+triangle (at its closest point, or at its centre and corners where the ball is larger than it)
+or another ball, with the ball's friction after the solve (none between two balls). In a step
+in which particles also touch a terrain, the terrain replay (implicit_contact.py) takes the
+contacts beside its constraints through ``PenaltyStep``; an iteration solved again for grown
+own pairs there is refused in one line.
 """
 from typing import NamedTuple
 
@@ -39,11 +41,12 @@ import numpy as np
 from ..collision.contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE,
                                       PASSES, POINT_TRIANGLE, SolveContacts)
 from ..collision.contact_sets.solve import find_solve_contacts
-from ..collision.pair_lists.own_pairs import OwnPairs
+from ..collision.pair_lists.keeping import start_surface_pairs
+from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, grown_own_pairs,
+                                              own_pairs_touching)
 from ..collision.pair_lists.solve_pairs import kept_surface_pairs
 from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
                                           newton_iterations_needed, update_active_contacts)
-from ..errors import SceneError
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights, cross, dot,
                            dot4, far_from_bodies, point_geometry, segment_parameters,
@@ -84,19 +87,6 @@ class Replay(NamedTuple):
     response: object        # body_contact.Response or None
 
 
-def refuse_own_contact(physical, h, start, end, time) -> None:
-    """A self-colliding body whose own surfaces come within reach in the step: the forward
-    may have added its own pairs to the solve (collision/pair_lists/own_pairs.py), which the
-    replay does not follow yet."""
-    predicted = (start[0] + h * start[1], start[1])
-    if not (far_from_bodies(physical, h, start, end, own_only=True)
-            and far_from_bodies(physical, h, start, predicted, own_only=True)):
-        raise SceneError("self_collision", True, f"a body touches itself in the step from "
-                         f"t = {time:.6g} s under implicit_euler, which gradients do not "
-                         "follow yet (rk4 and the symplectic and explicit Euler methods do): "
-                         "use one of them, or set the body's self_collision to false")
-
-
 def touches_bodies(physical, h, start, end) -> bool:
     """Whether the step from ``start`` to ``end`` may have had body-body contact: some pair
     within reach at its end, or at the start's prediction x + h v (body_contact.far_from_bodies
@@ -116,7 +106,8 @@ def replay(physical, integrator, solver, h, x, v):
     """The step as the forward took it (module doc): (x', v', Replay)."""
     penalty = PenaltyStep(physical, h, x, v, integrator.newton_iterations)
     dv = np.zeros_like(x)
-    for k in range(penalty.needed):
+    k = 0
+    while k < penalty.needed:
         first = k == 0
         x_k, v_k = estimate(x, v, dv, h, first)
         rhs = newton_rhs(physical, h, x, v, dv, first)
@@ -127,8 +118,11 @@ def replay(physical, integrator, solver, h, x, v):
             if not penalty.update(ddv):
                 break
             ddv = solver.solve(np.ascontiguousarray(rhs + penalty.rhs), penalty.contacts)
+        if penalty.regrow(dv, ddv):
+            continue   # the iteration again, from where it started, with the grown set
         penalty.keep(dv, first, ddv)
         dv = dv + ddv
+        k += 1
     v_end = v + dv
     v_after, friction, x_before = penalty_end(physical, penalty, h, x, v_end)
     x_end, v_after = place(physical, x + h * v_after, v_after)   # the post-step pass's start
@@ -409,14 +403,37 @@ class PenaltyStep:
     def __init__(self, physical, h, x, v, requested):
         self.physical, self.h, self.x, self.v = physical, h, x, v
         arrays = physical.bodies.arrays
-        none = np.empty((0, 2), np.int64)
-        self.contacts = find_solve_contacts(arrays, np.ascontiguousarray(x),
-                                            np.ascontiguousarray(v), h, kept_surface_pairs(x),
-                                            OwnPairs(none, none))
+        # a self-colliding body's own pairs in contact at x (any list gives the same set)
+        x = np.ascontiguousarray(x)
+        self.own, self.pairs = own_pairs_touching(arrays, x, start_surface_pairs(arrays, x))
+        self.redone = 0
+        self.contacts = self.found()
         self.needed = newton_iterations_needed(arrays, self.contacts, np.ascontiguousarray(v),
                                                h, requested)
         self.rhs = np.zeros_like(x)
         self.iterations = []   # [Linearized], the active set of the iteration's last solve
+
+    def found(self):
+        """The contact set: find_solve_contacts with the own pairs found so far."""
+        return find_solve_contacts(self.physical.bodies.arrays, np.ascontiguousarray(self.x),
+                                   np.ascontiguousarray(self.v), self.h,
+                                   kept_surface_pairs(self.x), self.own)
+
+    def regrow(self, dv, ddv):
+        """After an iteration's solves (implicit_euler.own_pairs_met): whether the own pairs in
+        contact at x + h (v + dv + ddv) grew, and then the contact set with them, for the
+        iteration to be solved again (MOST_OWN_REDOS times a step at most)."""
+        if self.redone >= MOST_OWN_REDOS or not self.physical.bodies.own:
+            return False
+        v_k = (self.v + dv) + ddv
+        own, grew, self.pairs = grown_own_pairs(self.physical.bodies.arrays,
+                                                np.ascontiguousarray(self.x + self.h * v_k),
+                                                self.pairs, self.own)
+        if not grew:
+            return False
+        self.own, self.redone = own, self.redone + 1
+        self.contacts = self.found()
+        return True
 
     def linearize(self, dv):
         """Linearize the contacts about x + h (v + dv); returns their right-hand side."""

@@ -39,6 +39,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import sparse
 
+from ..errors import SceneError
 from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import along, impacts, impacts_vjp, plane_distance
@@ -296,6 +297,11 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
                 break
             ddv = solve_step(physical, constraints, kind, *full(), u0, c)
             steps.append(Solve(kind.copy(), c.copy(), ddv, active()))
+        if penalty is not None and penalty.regrow(dv, ddv):
+            raise SceneError("self_collision", True, "a body's surface folds onto itself within "
+                             "a step in which it touches a terrain under implicit_euler, which "
+                             "gradients do not follow yet: try a smaller dt, rk4 or "
+                             "symplectic_euler")
         record.append(Iteration(dv, first, cap, c_start, steps, c.copy(), cap_active))
         if penalty is not None:
             penalty.keep(dv, first, ddv)

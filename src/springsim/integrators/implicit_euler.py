@@ -149,7 +149,7 @@ def backward_euler_step(model, state, scratch, h, pairs):
         assemble_system(model, scratch.layout, state, work, contacts, h, newton == 0)
         solve_with_contacts(model, scratch, state, contacts, h, newton == 0)
         if redone < MOST_OWN_REDOS and any_self_collision(model):
-            grew, own, pairs = own_pairs_met(model, state, work, h, own, pairs)
+            grew, own, pairs = own_pairs_met(model, state, work, h, own, pairs, newton == 0)
             if grew:   # solve this iteration again, from where it started, with them
                 contacts = find_solve_contacts(model, state.x, state.v, h, scratch.solve_pairs,
                                                own)
@@ -280,16 +280,23 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
 
 
 @kernel
-def own_pairs_met(model, state, work, h, own, pairs):
+def own_pairs_met(model, state, work, h, own, pairs, first):
     """(whether a self-colliding body's own pairs in contact grew, them (OwnPairs), the list):
     ``own`` and those that the estimate after this solve, x + h (v_k + ddv), brings into
     contact (collision/pair_lists/own_pairs.py). The estimate is put back where the iteration
-    started."""
+    started: (x, v) itself in the ``first`` (start_estimate). Put at x + h v instead, the first
+    iteration was solved again with its forces and matrix taken at the predicted end and its
+    h^2 dF/dx v term as well, which counts the step's motion twice
+    (tests/test_gradients_self_contact.py: the adjoint's replay of such a step did not end
+    where the forward had)."""
     add_scaled(work.v_k, work.v_k, 1.0, work.ddv)
     add_scaled(work.x_k, state.x, h, work.v_k)
     own, grew, pairs = grown_own_pairs(model, work.x_k, pairs, own)
-    add_scaled(work.v_k, state.v, 1.0, work.dv)
-    add_scaled(work.x_k, state.x, h, work.v_k)
+    if first:
+        start_estimate(state, work)
+    else:
+        add_scaled(work.v_k, state.v, 1.0, work.dv)
+        add_scaled(work.x_k, state.x, h, work.v_k)
     return grew, own, pairs
 
 
