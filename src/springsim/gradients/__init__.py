@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import SceneError, require
 from .adjoints import ADJOINTS
-from .checks import check_supported, step_checks
+from .checks import check_supported, contact_check
 from .losses import as_loss
 from .parameters import parameter
 from .physics import Cotangents, Physical
@@ -90,7 +90,7 @@ def run_gradient(simulation, loss, duration: float, memory_limit=DEFAULT_MEMORY_
     physical = Physical.of(simulation.model)
     adjoint = ADJOINTS[simulation.integrator.name](simulation.integrator, simulation.model)
     x0_bar, v0_bar, bar = backward(simulation, adjoint, physical, tape, frame_steps, frame_bars,
-                                     step_checks(simulation, physical))
+                                     contact_check(simulation, physical))
     # a pinned particle never moves: its initial velocity is zeroed by the model
     v0_bar[~physical.free] = 0.0
     return Result(float(value), x0_bar, v0_bar, bar, tape.stored_bytes, frames)

@@ -31,7 +31,6 @@ import numpy as np
 from ..collision.broad_phase.balls import find_contacts
 from ..collision.broad_phase.surfaces import surface_pairs
 from ..collision.contact_sets import BALL_PASSES, CORRECTION, PASSES
-from ..collision.pair_lists.solve_pairs import NO_SELF_CONTACT
 from ..errors import SceneError
 
 STEP = 1e-30    # the complex step: its square and products vanish beside any coordinate
@@ -283,13 +282,12 @@ def empty_part():
                                np.empty(0), np.empty(0), np.empty((0, 2), np.int64)))
 
 
-def near_pairs(bodies, x, beyond, own_only=False):
+def near_pairs(bodies, x, beyond):
     """((K, 2) point-triangle pairs (particle, triangle row), (L, 2) edge-edge pairs (edge rows,
     lower first)) closer than their rest distance plus ``beyond`` (m): the forward's own broad
-    phase (collision/broad_phase/surfaces.py), searched afresh, with a self-colliding body's
-    own pairs, or only those (``own_only``)."""
-    return surface_pairs(bodies.arrays, np.ascontiguousarray(x),
-                         NO_SELF_CONTACT if own_only else beyond, beyond)
+    phase (collision/broad_phase/surfaces.py), searched afresh, a self-colliding body's own
+    pairs included."""
+    return surface_pairs(bodies.arrays, np.ascontiguousarray(x), beyond, beyond)
 
 
 def point_contacts(bodies, x, start, pairs):
@@ -661,13 +659,13 @@ def check_replayed(replayed, end, h, allowed, what):
         raise SceneError("bodies", "contact", what)
 
 
-def far_from_bodies(physical, h, start, end, own_only=False) -> bool:
-    """Whether no body contact (only a body's own, with ``own_only``) can have acted in the
-    step from ``start`` to ``end``: nothing touched at the step's end before the correction,
-    which moved each particle by less than the rest distance plus what it slid. Tested at the
-    end with every reach doubled and the fastest particle's step added, generously."""
+def far_from_bodies(physical, h, start, end) -> bool:
+    """Whether no body contact can have acted in the step from ``start`` to ``end``: nothing
+    touched at the step's end before the correction, which moved each particle by less than
+    the rest distance plus what it slid. Tested at the end with every reach doubled and the
+    fastest particle's step added, generously."""
     bodies = physical.bodies
-    if not (bodies.own if own_only else bodies.collide):
+    if not bodies.collide:
         return True
     x = end[0]
     slack = 2.0 * h * float(np.sqrt(np.max(dot(start[1], start[1]), initial=0.0)
@@ -675,12 +673,9 @@ def far_from_bodies(physical, h, start, end, own_only=False) -> bool:
     if len(bodies.triangles):
         # 2 rest distances (a contact's reach) and the correction's move (a rest distance
         # and what the particle slid)
-        points, edges = near_pairs(bodies, x, 2.0 * float(bodies.thickness.max()) + slack,
-                                   own_only)
+        points, edges = near_pairs(bodies, x, 2.0 * float(bodies.thickness.max()) + slack)
         if len(points) or len(edges):
             return False
-    if own_only:
-        return True
     for a in bodies.balls:
         distance = np.sqrt(dot(x - x[a], x - x[a]))
         close = distance < 2.0 * (bodies.radius[a] + bodies.radius) + slack

@@ -29,12 +29,6 @@ def check_supported(simulation) -> None:
                          + ", ".join(ADJOINTS))
 
 
-def step_checks(simulation, physical=None):
-    """The check of every step's start that the scene needs (``contact_check``), as one
-    function ``check(step, (x, v))``; None if it needs none."""
-    return contact_check(simulation, physical)
-
-
 def contact_check(simulation, physical=None):
     """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
     the contact band of a terrain the adjoint does not follow (or would be within the step, as

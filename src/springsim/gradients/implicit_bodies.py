@@ -42,7 +42,7 @@ from ..collision.contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, ED
                                       PASSES, POINT_TRIANGLE, SolveContacts)
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.keeping import start_surface_pairs
-from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, grown_own_pairs,
+from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, OwnPairs, grown_own_pairs,
                                               own_pairs_touching)
 from ..collision.pair_lists.solve_pairs import kept_surface_pairs
 from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
@@ -395,6 +395,16 @@ def stencil_normal(w, e4, s4, flipped):
 
 # ---- with terrain contact in the same step (implicit_contact.py's replay takes these) -----------
 
+def own_pairs_at(bodies, x):
+    """(a self-colliding body's own pairs in contact at x, the post-step pair list they came
+    from; any list gives the same set), or none without such a body (no search)."""
+    if not bodies.own:
+        none = np.empty((0, 2), np.int64)
+        return OwnPairs(none, none), None
+    x = np.ascontiguousarray(x)
+    return own_pairs_touching(bodies.arrays, x, start_surface_pairs(bodies.arrays, x))
+
+
 class PenaltyStep:
     """A step's penalty contacts as the terrain replay (implicit_contact.replay) takes them,
     beside its constraints: the contact set, linearized each Newton iteration, its matrix and
@@ -403,9 +413,7 @@ class PenaltyStep:
     def __init__(self, physical, h, x, v, requested):
         self.physical, self.h, self.x, self.v = physical, h, x, v
         arrays = physical.bodies.arrays
-        # a self-colliding body's own pairs in contact at x (any list gives the same set)
-        x = np.ascontiguousarray(x)
-        self.own, self.pairs = own_pairs_touching(arrays, x, start_surface_pairs(arrays, x))
+        self.own, self.pairs = own_pairs_at(physical.bodies, x)
         self.redone = 0
         self.contacts = self.found()
         self.needed = newton_iterations_needed(arrays, self.contacts, np.ascontiguousarray(v),

@@ -235,13 +235,13 @@ class BallWinds(NamedTuple):
     air: Air
 
 
-def ball_winds(physical, x, v, t) -> BallWinds:
+def ball_winds(physical, v, air_there: Triangles) -> BallWinds:
+    """The balls' winds from the air and the gusts at every particle that ``triangles_at``
+    found for the same evaluation."""
     balls = physical.bodies.balls
-    air_now = air(physical, t)
-    w = (air_now.value[:3] + corner_gusts(physical, x[balls], air_now.value[3], t)
-         - v[balls])
+    w = air_there.air.value[:3] + air_there.gusts[balls] - v[balls]
     return BallWinds(balls, w, np.sqrt(np.sum(w * w, axis=1)),
-                     np.pi * physical.bodies.radius[balls] ** 2, air_now)
+                     np.pi * physical.bodies.radius[balls] ** 2, air_there.air)
 
 
 def ball_chain_back(physical, x, t, at: BallWinds, w_bar, drag_bar, x_bar, v_bar, bar) -> None:
@@ -261,10 +261,10 @@ def unit(at: BallWinds):
         return np.where(at.speed[:, None] > 0.0, at.w / at.speed[:, None], 0.0)
 
 
-def ball_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
+def ball_forces_vjp(physical, x, v, air_there, g, x_bar, v_bar, bar) -> None:
     """g . d(F_balls)/d(everything): dF/dw = c A (|w| I + w w^T / |w|)."""
     t = physical.clock[FORCE_TIME]
-    at = ball_winds(physical, x, v, t)
+    at = ball_winds(physical, v, air_there)
     c, g_b, u = at.air.value[4], g[at.balls], unit(at)
     along = np.sum(g_b * at.w, axis=1)
     w_bar = (c * at.area)[:, None] * (at.speed[:, None] * g_b + along[:, None] * u)
@@ -272,11 +272,11 @@ def ball_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
     ball_chain_back(physical, x, t, at, w_bar, drag_bar, x_bar, v_bar, bar)
 
 
-def ball_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
+def ball_blocks_vjp(physical, x, v, air_there, h, weights, x_bar, v_bar, bar) -> None:
     """d(sum_i W_i : B_i)/d(everything), B_i = h c A (|w| I + w w^T / |w|) (wind.py's
     add_ball_derivative)."""
     t = physical.clock[FORCE_TIME]
-    at = ball_winds(physical, x, v, t)
+    at = ball_winds(physical, v, air_there)
     c, u, q = at.air.value[4], unit(at), weights[at.balls]
     trace = np.einsum("kii->k", q)
     uqu = np.einsum("ki,kij,kj->k", u, q, u)
@@ -300,7 +300,7 @@ def wind_forces(physical, x, v):
     for j in range(3):
         np.add.at(out, physical.wind_triangles[:, j], share)
     if len(physical.bodies.balls):
-        balls = ball_winds(physical, x, v, physical.clock[FORCE_TIME])
+        balls = ball_winds(physical, v, at)
         out[balls.balls] += (balls.air.value[4] * balls.area * balls.speed)[:, None] * balls.w
     return out
 
@@ -326,7 +326,7 @@ def wind_forces_vjp(physical, x, v, g, x_bar, v_bar, bar) -> None:
         np.sum(g_k * found.along_size[:, None] * found.tangential)])
     chain_back(physical, x, t, at, corners_bar, w_bar, coefficients_bar, x_bar, v_bar, bar)
     if len(physical.bodies.balls):
-        ball_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
+        ball_forces_vjp(physical, x, v, at, g, x_bar, v_bar, bar)
 
 
 def wind_blocks(physical, x, v, h):
@@ -346,7 +346,7 @@ def wind_blocks(physical, x, v, h):
     for j in range(3):
         np.add.at(out, physical.wind_triangles[:, j], blocks)
     if len(physical.bodies.balls):
-        balls = ball_winds(physical, x, v, physical.clock[FORCE_TIME])
+        balls = ball_winds(physical, v, at)
         u = unit(balls)
         size = h * balls.air.value[4] * balls.area * balls.speed
         out[balls.balls] += size[:, None, None] * (np.eye(3) + u[:, :, None] * u[:, None, :])
@@ -377,7 +377,7 @@ def wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
                                               np.sum(found.along_size * (trace - nqn))])
     chain_back(physical, x, t, at, corners_bar, w_bar, coefficients_bar, x_bar, v_bar, bar)
     if len(physical.bodies.balls):
-        ball_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar)
+        ball_blocks_vjp(physical, x, v, at, h, weights, x_bar, v_bar, bar)
 
 
 def outer_weights(left, right):

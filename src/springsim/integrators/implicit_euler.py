@@ -284,11 +284,8 @@ def own_pairs_met(model, state, work, h, own, pairs, first):
     """(whether a self-colliding body's own pairs in contact grew, them (OwnPairs), the list):
     ``own`` and those that the estimate after this solve, x + h (v_k + ddv), brings into
     contact (collision/pair_lists/own_pairs.py). The estimate is put back where the iteration
-    started: (x, v) itself in the ``first`` (start_estimate). Put at x + h v instead, the first
-    iteration was solved again with its forces and matrix taken at the predicted end and its
-    h^2 dF/dx v term as well, which counts the step's motion twice
-    (tests/test_gradients_self_contact.py: the adjoint's replay of such a step did not end
-    where the forward had)."""
+    started: (x, v) itself in the ``first`` (start_estimate), since at x + h v that iteration's
+    forces and matrix, with its h^2 dF/dx v term, would count the step's motion twice."""
     add_scaled(work.v_k, work.v_k, 1.0, work.ddv)
     add_scaled(work.x_k, state.x, h, work.v_k)
     own, grew, pairs = grown_own_pairs(model, work.x_k, pairs, own)
