@@ -77,7 +77,7 @@ def test_moving_terrain_gradients_match_finite_differences(integrator, case):
 
 def test_a_deforming_terrain_is_refused_where_it_is_under_implicit_euler(tmp_path):
     """A plate that a point cache lifts 1.5 m into the small cube within the run is refused
-    under implicit_euler, whose contact adjoint follows still planes only: the check looks it
+    under implicit_euler, whose contact adjoint follows still terrains only: the check looks it
     up where its animation has it (where the scene placed it, it stays clear)."""
     from springsim.errors import SceneError
     from springsim.gradients import gradient

@@ -25,7 +25,7 @@ from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
                               replay as bodies_replay, touches_bodies)
-from .implicit_contact import adjoint as contact_adjoint, replay, touches_planes
+from .implicit_contact import adjoint as contact_adjoint, replay, touches_terrains
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
 from .pins import aim, place, release, soft
@@ -235,7 +235,7 @@ class ImplicitEulerAdjoint(Adjoint):
         release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
         v = aim(physical, x, v, h)
         bodies = touches_bodies(physical, h, start, end)
-        if len(start) == 3 and touches_planes(physical, h, start, end):
+        if len(start) == 3 and touches_terrains(physical, h, start, end):
             if holds(physical):
                 raise SceneError("attachments", "hard", "hold bodies that touch a terrain "
                                  "under implicit_euler, which gradients do not follow yet: "

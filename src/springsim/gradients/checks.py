@@ -3,13 +3,13 @@ run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are
-soft (pins.py) and attachments, soft or hard (attachments.py); contact with still planes
-(contact.py, implicit_contact.py), and with spheres, bowls and meshes, with terrains moving
-rigidly and with deforming meshes under the explicit methods (contact.py); body-body contact
+soft (pins.py) and attachments, soft or hard (attachments.py); contact with still planes,
+spheres, bowls and meshes (contact.py, implicit_contact.py), and with terrains moving rigidly
+and with deforming meshes under the explicit methods (contact.py); body-body contact
 of surfaces (a self-colliding body's own too) and of balls with balls and particles under
 every integrator (body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than
-given a gradient that leaves a force out: contact with curved, moving or deforming terrains
-under implicit_euler, and there hard attachments on bodies that touch a terrain or each other
+given a gradient that leaves a force out: contact with moving or deforming terrains under
+implicit_euler, and there hard attachments on bodies that touch a terrain or each other
 and a fold that closes within a step that touches a terrain (adjoints.py and
 implicit_contact.py refuse these at that step). A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
@@ -36,18 +36,17 @@ def contact_check(simulation, physical=None):
     calls it on every step's start, with ``physical``'s clock there: a terrain that moves or
     deforms is looked up where it is at the step's start and end (without ``physical``, where
     the scene placed it)."""
-    from ..terrains import Plane
     from .contact import Planes
-    from .terrain_shapes import Moving
+    from .terrain_shapes import Deforming, Moving
 
     model = simulation.model
     shapes = (Planes.of(model) if physical is None else physical.planes).shapes
     implicit = simulation.integrator.name == "implicit_euler"
-    still = [not isinstance(shape, Moving) for shape in shapes]
-    followed = [shape is not None and ((isinstance(terrain, Plane) and fixed) or not implicit)
-                for terrain, shape, fixed in zip(model.terrains, shapes, still)]
-    covered = ("still planes only under implicit_euler (spheres, bowls and meshes, still, "
-               "moving rigidly or deforming, too under the explicit methods)" if implicit
+    followed = [shape is not None
+                and not (implicit and isinstance(shape, (Moving, Deforming)))
+                for shape in shapes]
+    covered = ("still planes, spheres, bowls and meshes only under implicit_euler (moving "
+               "rigidly or deforming too under the explicit methods)" if implicit
                else "planes, spheres, bowls and meshes, still, moving rigidly or deforming, "
                "only")
     if all(followed):

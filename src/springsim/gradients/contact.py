@@ -25,7 +25,7 @@ surface's, u = c' + w x (x - c), which depends on the position too: the relative
 cotangent reaches the positions through du/dx = [w]x. A deforming mesh's surface moves with its
 point cache: u is its closest point's, interpolated from its corners, and du/dx comes from how
 that point's weights change with the position (terrain_shapes.Deforming).
-Backward Euler's contact (implicit_contact.py) follows still planes only.
+Backward Euler's contact (implicit_contact.py) follows the still ones.
 """
 from typing import NamedTuple
 

@@ -1,7 +1,8 @@
-"""Backward Euler's step with terrain contact (planes), replayed in NumPy, and its adjoint.
+"""Backward Euler's step with contact with still terrains (planes, spheres, bowls, meshes),
+replayed in NumPy, and its adjoint.
 
 The forward (integrators/implicit_euler.py with implicit/constraints.py) holds each contact's
-normal velocity at a floor and lets it slide along the plane against a friction damper c (N s/m)
+normal velocity at a floor and lets it slide along the surface against a friction damper c (N s/m)
 that it chooses from the solve's own reaction impulses, a few passes a Newton iteration:
 
     find_constraints          kind, normal, floor of every particle; c carried from the last step
@@ -12,7 +13,7 @@ that it chooses from the solve's own reaction impulses, a few passes a Newton it
       solve                   S (A ddv - b) = 0 with the contacts' normal components at their
                               floors (z) and the pinned particles' at zero
       update, solve again     R = A ddv - b: a contact with R . n < 0 is released, a free
-                              particle that the solve carries into a plane becomes a contact,
+                              particle that the solve carries into a terrain becomes a contact,
                               every other contact's c is chosen anew (coulomb_damping); solved
                               again while anything moved (at most MAX_CONTACT_UPDATES passes)
       dv += ddv
@@ -31,6 +32,13 @@ Where bodies touch each other in the same step, their penalty contacts (implicit
 had, their friction comes after the Newton iterations and the post-step pass after the impacts;
 the adjoint gives each solve's and each update's cotangents their share.
 
+Each contact's normal and distance are its terrain's at the step's start (``look_up``). On a
+curved terrain the normal turns with that position, so the adjoint also gathers the normal's
+cotangent from everywhere it enters (the held components, the projection the solve keeps, the
+dampers, the impulses and slips the updates read, the restored approach speed) and carries it to
+the start through the terrain's curvature (``held_vjp``); on a plane that cotangent goes
+nowhere and is not gathered.
+
 The gradient is of the exactly solved step: the forward's CG stops at its tolerance, and the
 difference is of that order (docs/guide/gradients.md).
 """
@@ -42,7 +50,7 @@ from scipy import sparse
 from ..errors import SceneError
 from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
-from .contact import along, impacts, impacts_vjp, plane_distance
+from .contact import add_curvature, along, followed, impacts, impacts_vjp
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
 from .attachments import attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp
@@ -50,6 +58,7 @@ from .body_contact import respond, respond_vjp
 from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, penalty_end,
                               penalty_matrix, penalty_vjp)
 from .pins import pin_blocks, pin_blocks_vjp, place, release
+from .terrain_shapes import Deforming, Flat, Moving
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
@@ -60,7 +69,7 @@ KEPT, CAPPED, SLIDING, HOLDING, RELEASED = 0, 1, 2, 3, 4
 
 class Constraints(NamedTuple):
     kind: np.ndarray       # (P,) FREE, CONTACT, PINNED
-    terrain: np.ndarray    # (P,) the contact's plane or -1
+    terrain: np.ndarray    # (P,) the contact's terrain or -1
     normal: np.ndarray     # (P, 3)
     floor: np.ndarray      # (P,) m/s
     floor_case: np.ndarray
@@ -77,58 +86,96 @@ def floor_of(phi, v_n, h, epsilon):
     return floor, case
 
 
-def floor_vjp(physical, constraints, index, floor_bar, h, x_bar, v_bar):
-    """floor = -phi / h (FLOOR_GAP, phi > 0 or outside the band), v . n (FLOOR_VELOCITY), 0."""
-    n = constraints.normal[index]
+class HeldBars(NamedTuple):
+    """The cotangents of the contacts' floors and normals, summed over the step's solves."""
+
+    floor: np.ndarray     # (P,)
+    normal: object        # (P, 3), or None where every terrain is flat (no curvature)
+
+
+def held_vjp(constraints, lookups, x, v, bars: HeldBars, h, x_bar, v_bar):
+    """Each contact's floor (-phi / h (FLOOR_GAP), v . n (FLOOR_VELOCITY) or 0) and normal are
+    its terrain's at the step's start: their cotangents go to x through grad phi and the
+    normal's derivative (a curved terrain's; a plane has none), and to v."""
+    index = np.nonzero(bars.floor)[0]
     case = constraints.floor_case[index]
-    g = floor_bar[index]
-    gap = np.where(case == FLOOR_GAP, -g / h, 0.0)   # phi = n . x - ... : d phi / dx = n
+    g = bars.floor[index]
+    phi_bar = np.where(case == FLOOR_GAP, -g / h, 0.0)
     vel = np.where(case == FLOOR_VELOCITY, g, 0.0)
-    np.add.at(x_bar, index, gap[:, None] * n)
-    np.add.at(v_bar, index, vel[:, None] * n)
+    n_bar = np.zeros_like(x) if bars.normal is None else bars.normal.copy()
+    n_bar[index] += vel[:, None] * v[index]
+    v_bar[index] += vel[:, None] * constraints.normal[index]
+    for lookup in lookups:
+        mine = constraints.terrain[index] == lookup.terrain
+        rows = index[mine]
+        x_bar[rows] += phi_bar[mine, None] * lookup.shape.gradient(x[rows])
+        rows = np.nonzero((constraints.terrain == lookup.terrain) & n_bar.any(axis=1))[0]
+        if len(rows):
+            add_curvature(rows, lookup.shape.curvature(x[rows]), n_bar[rows], x_bar)
 
 
-def find_constraints(physical, x, v, h, previous_kind, previous_terrain):
-    """constraints.find_constraints for planes: (Constraints, whether each contact continues
-    the last step's, with the same plane)."""
-    planes = physical.planes
+class Lookup(NamedTuple):
+    """A still terrain as the step's start sees it: the forward looks every terrain up once,
+    at the start's positions (constraints.closest_terrain), whichever solve asks."""
+
+    terrain: int
+    shape: object         # terrain_shapes' shape
+    phi: np.ndarray       # (P,) m
+    normal: np.ndarray    # (P, 3)
+
+
+def still_terrains(physical):
+    """(t, shape) of every terrain the replay follows: still planes, spheres, bowls and meshes
+    (moving and deforming ones are refused where touched: checks.contact_check)."""
+    return [(t, shape) for t, shape in followed(physical.planes)
+            if not isinstance(shape, (Moving, Deforming))]
+
+
+def look_up(physical, x):
+    """[Lookup] of every followed terrain at the positions x."""
+    offset = physical.planes.offset
+    return [Lookup(t, shape, shape.distance(x, offset), np.asarray(shape.normals(x)))
+            for t, shape in still_terrains(physical)]
+
+
+def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups):
+    """constraints.find_constraints: (Constraints, whether each contact continues the last
+    step's, with the same terrain)."""
+    epsilons = physical.planes.epsilon
     count = x.shape[0]
     kind = np.where(physical.free, FREE, PINNED).astype(np.int64)
     terrain = np.full(count, -1)
     normal = np.zeros((count, 3))
     phi_best, v_n_best = np.zeros(count), np.zeros(count)
     earliest = np.full(count, np.inf)
-    for t in range(len(planes.epsilon)):
-        n = planes.normal[t]
-        phi, v_n = plane_distance(planes, t, x), along(v, n)
+    for t, _, phi, n in lookups:
+        v_n = along(v, n)
         reached = phi + h * v_n
-        touching = ((phi < planes.epsilon[t]) | (reached < planes.epsilon[t])) & physical.free
+        touching = ((phi < epsilons[t]) | (reached < epsilons[t])) & physical.free
         better = touching & (reached < earliest)
         terrain[better], earliest[better] = t, reached[better]
         phi_best[better], v_n_best[better] = phi[better], v_n[better]
-        normal[better] = n
+        normal[better] = n[better]
     contact = terrain >= 0
     kind[contact] = CONTACT
-    epsilon = planes.epsilon[np.maximum(terrain, 0)]
+    epsilon = epsilons[np.maximum(terrain, 0)]
     floor, case = floor_of(phi_best, v_n_best, h, epsilon)
     floor[~contact] = 0.0
     continues = contact & (previous_kind == CONTACT) & (previous_terrain == terrain)
     return Constraints(kind, terrain, normal, floor, case), continues
 
 
-def touches_planes(physical, h, start, end) -> bool:
-    """Whether a step may have had terrain contacts: some free particle within a plane's reach
-    at its start (find_constraints' test) or within its band at its end (a contact made during
-    the step ends on its floor, in the band). Otherwise the step is the plain one
+def touches_terrains(physical, h, start, end) -> bool:
+    """Whether a step may have had terrain contacts: some free particle within a terrain's
+    reach at its start (find_constraints' test) or within its band at its end (a contact made
+    during the step ends on its floor, in the band). Otherwise the step is the plain one
     (solve.py), which is quicker."""
     planes = physical.planes
     (x, v), x_end = start[:2], end[0]
-    for t in range(len(planes.epsilon)):
-        if not planes.is_plane[t]:
-            continue
-        phi = plane_distance(planes, t, x)
-        reach = np.minimum(phi, phi + h * along(v, planes.normal[t]))
-        near = np.minimum(reach, plane_distance(planes, t, x_end))
+    for t, shape in still_terrains(physical):
+        phi = shape.distance(x, planes.offset)
+        reach = np.minimum(phi, phi + h * along(v, shape.normals(x)))
+        near = np.minimum(reach, shape.distance(x_end, planes.offset))
         if np.any(physical.free & (near < planes.epsilon[t])):
             return True
     return False
@@ -149,6 +196,7 @@ class Solve(NamedTuple):
     kind: np.ndarray      # the constraints it had
     c: np.ndarray         # (P,) the friction dampers in its matrix
     ddv: np.ndarray       # (P, 3) its solution
+    push: np.ndarray      # (P,) n . (A ddv - b) on contacts, the terrain's push (N s), else 0
     active: object = None   # (K,) bool: the penalty contacts active in it (none: no bodies)
 
 
@@ -164,13 +212,15 @@ class Update(NamedTuple):
     sliding: np.ndarray
     released: np.ndarray  # contacts it released (c -> 0)
     grown: np.ndarray     # free particles it made contacts (c = 0)
+    reaction: np.ndarray  # (len(index), 3) A_sp ddv - b_sp, whose normal part is the impulse
     active: object = None   # the penalty contacts active in the solve before it
 
 
 class Iteration(NamedTuple):
     dv: np.ndarray        # the estimate it starts from
     first: bool
-    cap: tuple            # (index, c_in, slip, impulse, gap) of the carried dampers it capped
+    cap: tuple            # (index, c_in, slip, impulse, gap, b) of the carried dampers it
+                          # capped, b their rows of the right-hand side
     c_start: np.ndarray   # (P,) the dampers the matrix starts with (after any cap)
     steps: list           # [Solve, Update, Solve, ..., (Update)] in order
     c_end: np.ndarray     # the dampers it leaves
@@ -192,8 +242,9 @@ class Replay(NamedTuple):
     iterations: list
     restored: np.ndarray  # particles whose approach speed the end restored
     impacts: list         # contact.impacts' record
-    end: tuple            # (x, v) before the impact pass
+    end: tuple            # (x, v) before the impact pass, and v before the restoring
     bodies: object = None   # Bodies: the penalty contacts' part, when bodies touched too
+    lookups: list = ()    # [Lookup] of the terrains at the step's start
 
 
 def diagonal_blocks(physical, x_k, v_k, h):
@@ -241,7 +292,9 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     """The step as the forward took it (module doc), each solve exact; with ``penalty`` (an
     implicit_bodies.PenaltyStep) the bodies' penalty contacts in every solve, their friction
     after it and the post-step pass. Returns (x', v', the dampers it leaves, Replay)."""
-    constraints, continues = find_constraints(physical, x, v, h, previous_kind, previous_terrain)
+    lookups = look_up(physical, x)
+    constraints, continues = find_constraints(physical, x, v, h, previous_kind, previous_terrain,
+                                              lookups)
     kind = constraints.kind.copy()
     normal = constraints.normal.copy()
     terrain = constraints.terrain.copy()
@@ -272,7 +325,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
 
         u0 = v + dv
         blocks = diagonal_blocks(physical, x_k, v_k, h)
-        cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
+        cap = (np.empty(0, np.int64), np.empty(0), np.empty(0), np.empty(0), np.empty(0),
+               np.empty((0, 3)))
         cap_active = active()
         if first:   # remembered_friction_in_cone
             *cap, lowered = capped_dampers(physical, constraints, kind, blocks, full()[1], u0, c)
@@ -281,11 +335,12 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
         c_start = c.copy()
         steps = []
         ddv = solve_step(physical, constraints, kind, *full(), u0, c)
-        steps.append(Solve(kind.copy(), c.copy(), ddv, active()))
+        steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *full(), ddv),
+                           active()))
         for _ in range(MAX_CONTACT_UPDATES):
             solved_with = active()
-            update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind,
-                                                  full()[0], blocks, full()[1], u0, c, ddv)
+            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, full()[0],
+                                                  blocks, full()[1], u0, c, ddv, lookups)
             steps.append(update._replace(active=solved_with))
             bodies_changed = penalty is not None and penalty.update(ddv)
             moved = np.sum(np.abs(c_new[update.index] - c[update.index])
@@ -296,7 +351,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             if not (changed or moved > FRICTION_SETTLED * total):
                 break
             ddv = solve_step(physical, constraints, kind, *full(), u0, c)
-            steps.append(Solve(kind.copy(), c.copy(), ddv, active()))
+            steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *full(), ddv),
+                               active()))
         if penalty is not None and penalty.regrow(dv, ddv):
             raise SceneError("self_collision", True, "a body's surface folds onto itself within "
                              "a step in which it touches a terrain under implicit_euler, which "
@@ -326,7 +382,7 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
         x_out, v_out, response = respond(physical, *place(physical, x_out, v_out), x)
         bodies = bodies._replace(response=response)
     return x_out, v_out, c, Replay(constraints, continues, record, restored, found,
-                                   (x_end, v_end), bodies)
+                                   (x_end, v_end, v_k), bodies, lookups)
 
 
 def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
@@ -343,8 +399,15 @@ def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
     taken = np.where(d > 0.0, c[index] * d / (c[index] + np.where(d > 0.0, d, 1.0)), c[index])
     over = taken * slip > coulomb
     index, slip, impulse, gap = index[over], slip[over], impulse[over], gap[over]
-    return index, c[index].copy(), slip, impulse, gap, np.where(
+    return index, c[index].copy(), slip, impulse, gap, b_sp[index], np.where(
         slip > 0.0, coulomb[over] / np.where(slip > 0.0, slip, 1.0), 0.0)
+
+
+def pushes(kind, normal, matrix, b_sp, ddv):
+    """n . (A ddv - b) of each contact after a solve (0 elsewhere): the friction's share of
+    A ddv - b has no part along n."""
+    reaction = (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp
+    return np.where(kind == CONTACT, rowdot(reaction, normal), 0.0)
 
 
 def solve_step(physical, constraints, kind, matrix, b_sp, u0, c):
@@ -384,10 +447,11 @@ def tangents(n):
     return t1, np.cross(n, t1)
 
 
-def update_contacts(physical, h, x, v, constraints, kind, matrix, blocks, b_sp, u0, c, ddv):
+def update_contacts(physical, h, v, constraints, kind, matrix, blocks, b_sp, u0, c, ddv,
+                    lookups):
     """constraints.update_contacts: (Update, the dampers after it, whether a contact was
     added). ``kind`` and ``constraints`` grow in place as the forward's do."""
-    planes = physical.planes
+    epsilons = physical.planes.epsilon
     reaction = (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp   # friction's share has no n part
     u = u0 + ddv
     c_new = c.copy()
@@ -397,21 +461,18 @@ def update_contacts(physical, h, x, v, constraints, kind, matrix, blocks, b_sp, 
         if kind[i] == PINNED:
             continue
         if kind[i] == FREE:
-            best, earliest = -1, np.inf
-            for t in range(len(planes.epsilon)):
-                n = planes.normal[t]
-                p = planes.point[t]
-                phi = ((x[i, 0] - p[0]) * n[0] + (x[i, 1] - p[1]) * n[1]
-                       + (x[i, 2] - p[2]) * n[2] - planes.offset[i])
+            best, earliest = None, np.inf
+            for lookup in lookups:
+                phi, n = lookup.phi[i], lookup.normal[i]
                 reached = phi + h * (u[i, 0] * n[0] + u[i, 1] * n[1] + u[i, 2] * n[2])
                 if reached < 0.0 and reached < earliest:
-                    best, earliest, best_phi = t, reached, phi
-            if best >= 0:
-                n = planes.normal[best]
-                floor, case = floor_of(np.array([best_phi]), np.array([v[i] @ n]), h,
-                                       planes.epsilon[best])
+                    best, earliest = lookup, reached
+            if best is not None:
+                n = best.normal[i]
+                floor, case = floor_of(np.array([best.phi[i]]), np.array([v[i] @ n]), h,
+                                       epsilons[best.terrain])
                 kind[i] = CONTACT
-                constraints.terrain[i] = best
+                constraints.terrain[i] = best.terrain
                 constraints.normal[i] = n
                 constraints.floor[i], constraints.floor_case[i] = floor[0], case[0]
                 c_new[i] = 0.0
@@ -440,9 +501,11 @@ def update_contacts(physical, h, x, v, constraints, kind, matrix, blocks, b_sp, 
         impulses.append(impulse)
         stiffs.append(stiffness)
         slides.append(sliding)
-    update = Update(np.array(index, np.int64), np.array(cases, np.int64), c.copy(),
-                    np.array(slips), np.array(impulses), np.array(stiffs), np.array(slides),
-                    np.array(released, np.int64), np.array(grown, np.int64))
+    index = np.array(index, np.int64)
+    update = Update(index, np.array(cases, np.int64), c.copy(), np.array(slips),
+                    np.array(impulses), np.array(stiffs), np.array(slides),
+                    np.array(released, np.int64), np.array(grown, np.int64),
+                    reaction[index])
     return update, c_new, len(grown) > 0
 
 
@@ -460,12 +523,17 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
         release(physical, x_bar, v_bar)
         out_x += start_bar
     x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
-    floor_bar = np.zeros(len(x))
+    curved = any(not isinstance(lookup.shape, Flat) for lookup in record.lookups)
+    held_bar = HeldBars(np.zeros(len(x)), np.zeros_like(x) if curved else None)
     # restore_impact_speeds: v_k + (v . n - v_k . n) n
     vk_bar = v_end_bar.copy()
     rows = record.restored
     if len(rows):
         gn = rowdot(vk_bar[rows], normal[rows])
+        if curved:
+            moved = v[rows] - record.end[2][rows]
+            held_bar.normal[rows] += (rowdot(moved, normal[rows])[:, None] * vk_bar[rows]
+                                      + gn[:, None] * moved)
         vk_bar[rows] -= gn[:, None] * normal[rows]
         out_v[rows] += gn[:, None] * normal[rows]
     # x' = x + h v_k, v_k = v + dv (with the penalty contacts' friction between)
@@ -488,7 +556,7 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
                 penalty.iterations[k].contacts)
             bodies_k = (penalty, k, bars)
         dv_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar,
-                                          floor_bar, out_x, out_v, bar, bodies_k)
+                                          held_bar, out_x, out_v, bar, bodies_k)
         if bodies_k is not None:   # the contacts linearized about x + h (v + dv_k)
             estimate_bar = linearization_vjp(physical, penalty.iterations[k].contacts, x, v,
                                              it.dv, h, bodies_k[2], out_x, bar)
@@ -497,11 +565,11 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
             dv_bar = dv_bar + h * estimate_bar
     c_memory_bar = np.where(record.continues, c_bar, 0.0)
     # every particle that was a contact at some solve (made or released within the step too)
-    floor_vjp(physical, constraints, np.nonzero(floor_bar)[0], floor_bar, h, out_x, out_v)
+    held_vjp(constraints, record.lookups, x, v, held_bar, h, out_x, out_v)
     return out_x, out_v, c_memory_bar
 
 
-def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_bar, out_x,
+def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, held_bar, out_x,
                       out_v, bar, bodies=None):
     """One Newton iteration backwards (module doc); returns the cotangents of its starting dv
     and dampers. ``bodies``: (implicit_bodies.PenaltyStep, this iteration's number, its
@@ -516,6 +584,8 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
     weights = np.zeros((len(x), 3, 3))   # cotangent of each diagonal block (stiffness, cap)
     ddv_bar = dv_bar.copy()              # dv_next = dv + the last solve's ddv
     steps = it.steps
+    # the diagonal blocks the updates read (n^T B n), where the normals have a cotangent
+    blocks = None if held_bar.normal is None else diagonal_blocks(physical, x_k, v_k, h)
 
     def with_penalty(active):
         """(the matrix with the penalty contacts ``active``, those contacts) or (matrix, None)."""
@@ -529,7 +599,7 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
         full, contacts = with_penalty(step.active)
         if isinstance(step, Solve):
             lam = solve_adjoint(physical, h, (x_k, v_k), full, constraints, step, u0, ddv_bar,
-                                b_bar, u0_bar, c_bar, floor_bar, (xk_bar, vk_bar), bar)
+                                b_bar, u0_bar, c_bar, held_bar, (xk_bar, vk_bar), bar)
             if contacts is not None:   # its matrix's cotangent -lam ddv^T, its rhs's lam
                 penalty_vjp(contacts, lam, step.ddv, h, bodies[2])
             ddv_bar = np.zeros_like(x)
@@ -537,13 +607,13 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
             ddv_before = steps[j - 1].ddv
             g_r = update_adjoint(physical, h, (x_k, v_k), full, constraints, step, u0,
                                  ddv_before, c_bar, ddv_bar, b_bar, u0_bar, weights,
-                                 (xk_bar, vk_bar), bar)
+                                 (xk_bar, vk_bar), bar, held_bar, blocks)
             if contacts is not None and g_r is not None:   # R = A ddv - b: g_r ddv^T, -g_r
                 penalty_vjp(contacts, -g_r, ddv_before, h, bodies[2])
     if first and len(it.cap[0]):
         cap_bar = np.zeros_like(x)   # the cap read the right-hand side with the contacts
         cap_adjoint(physical, h, (x_k, v_k), constraints, it.cap, c_bar, cap_bar, u0_bar,
-                    floor_bar, weights, u0, bar)
+                    held_bar, weights, u0, bar)
         b_bar += cap_bar
         _, contacts = with_penalty(it.cap_active)
         if contacts is not None:
@@ -566,7 +636,7 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, floor_b
 
 
 def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar, b_bar, u0_bar,
-                  c_bar, floor_bar, estimate_bar, bar):
+                  c_bar, held_bar, estimate_bar, bar):
     """ddv = solve(A_sp + C(c), b_sp - c T u0, z(floor, u0)): lambda = (Q^T A Q)^-1 Q^T ddv_bar
     (A symmetric), then b's cotangent is lambda, A's -lambda ddv^T, z's (I - S)(ddv_bar -
     A lambda). ``estimate``: (x_k, v_k), with their cotangents ``estimate_bar``. Returns
@@ -586,13 +656,20 @@ def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar,
     u0_bar[contact] -= c[contact, None] * lam_t
     rest = ddv_bar - (matrix @ lam.ravel()).reshape(lam.shape)
     gap_bar = rowdot(rest[contact], n)
-    floor_bar[contact] += gap_bar
+    held_bar.floor[contact] += gap_bar
     u0_bar[contact] -= gap_bar[:, None] * n
+    # the normal: in z = gap n, in the projections S = I - n n^T that the solve holds (with
+    # A ddv - b = push n on a contact) and in the dampers' c (I - n n^T)
+    if held_bar.normal is not None:
+        u = u0[contact] + ddv[contact]
+        lam_c = lam[contact]
+        held_bar.normal[contact] += (-gap_bar[:, None] * u + step.push[contact, None] * lam_c
+                                     + (c[contact] * rowdot(u, n))[:, None] * lam_c)
     return lam
 
 
 def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, c_bar, ddv_bar,
-                   b_bar, u0_bar, weights, estimate_bar, bar):
+                   b_bar, u0_bar, weights, estimate_bar, bar, held_bar, blocks):
     """The dampers chosen from the solve before (constraints.coulomb_damping), backwards.
     Returns the cotangent g_r of the reaction R = A ddv - b they read (None if none)."""
     c_bar[update.released] = 0.0
@@ -628,14 +705,19 @@ def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, 
     b_bar -= g_r
     # stiffness = (tr B - n^T B n) / 2
     weights[index] += 0.5 * stiff_bar[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
+    if held_bar.normal is not None:   # impulse = n . R, u_t = (I - n n^T) u, n^T B n
+        held_bar.normal[index] += (
+            impulse_bar[:, None] * update.reaction
+            - (slip_bar * rowdot(u0[index] + ddv[index], n))[:, None] * direction
+            - stiff_bar[:, None] * np.einsum("kij,kj->ki", blocks[index], n))
     return g_r
 
 
-def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, floor_bar, weights,
+def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, held_bar, weights,
                 u0, bar):
     """c = friction max(impulse, 0) / slip for the carried dampers the cone capped, with
     impulse = -b_sp . n + gap n^T B n and gap = floor - n . u0."""
-    index, _, slip, impulse, gap = cap
+    index, _, slip, impulse, gap, b_rows = cap
     g = c_bar[index]
     c_bar[index] = 0.0   # the carried value is replaced
     mu = physical.friction[constraints.terrain[index]]
@@ -650,9 +732,15 @@ def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, f
     u0_bar[index] += (slip_bar / safe)[:, None] * tangential(u0[index], n)
     b_bar[index] -= impulse_bar[:, None] * n
     blocks = diagonal_blocks(physical, *estimate, h)[index]
-    gap_bar = impulse_bar * np.einsum("ki,kij,kj->k", n, blocks, n)
-    floor_bar[index] += gap_bar
+    block_n = np.einsum("kij,kj->ki", blocks, n)
+    gap_bar = impulse_bar * rowdot(block_n, n)
+    held_bar.floor[index] += gap_bar
     u0_bar[index] -= gap_bar[:, None] * n
+    if held_bar.normal is not None:   # in the impulse, the gap and the slip
+        held_bar.normal[index] += (
+            impulse_bar[:, None] * (2.0 * gap[:, None] * block_n - b_rows)
+            - gap_bar[:, None] * u0[index]
+            - ((slip_bar / safe) * rowdot(u0[index], n))[:, None] * tangential(u0[index], n))
     weights[index] += (impulse_bar * gap)[:, None, None] * n[:, :, None] * n[:, None, :]
 
 
