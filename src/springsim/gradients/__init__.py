@@ -62,6 +62,11 @@ def prepare(scene, wrt, values=None, integrator=None, dt=None, duration=None, th
             scene = p.apply(scene, values[p.name])
     simulation = Simulation(scene, integrator=integrator, dt=dt, threads=threads,
                             **integrator_options)
+    while (parts := simulation.substeps().count) > 1:
+        # a fast collider's step is taken as parts (substeps.py): the same run as steps of
+        # dt / parts, which are the steps the adjoint goes back through
+        simulation = Simulation(scene, integrator=integrator, dt=simulation.dt / parts,
+                                threads=threads, **integrator_options)
     model = simulation.model
     for p in params:
         if p.stage == "model" and p.name in values:
