@@ -160,29 +160,6 @@ def test_nan_loss_and_untouched_terrain():
 
 
 
-def test_a_touched_moving_plane_is_refused_under_implicit_euler():
-    """A moving plane that a particle touches is refused in one line under implicit_euler (the
-    explicit methods follow it: test_gradients_moving.py; the wind and pins are followed:
-    test_gradients_wind.py, test_gradients_pins.py)."""
-    from springsim.motion import Motion
-    from springsim.terrains.plane import Plane
-
-    def refused(scene, message):
-        with pytest.raises(SceneError, match=message):
-            gradient(scene, weighted_squares, ["drag"], duration=0.1,
-                     integrator="implicit_euler", dt=0.01)
-
-    platform = small_scene()
-    platform.bodies[0].pinned = ()
-    platform.terrains = [Plane(point=(0.0, 1.48, 0.0), motion=Motion(velocity=(1.0, 0.0, 0.0)))]
-    refused(platform, "gradients follow contact with still planes, spheres, bowls and meshes "
-            "only under implicit_euler")
-    # placed 1.5 m below the cube, it rises into it within the run: looked up where it is
-    rising = small_scene()
-    rising.bodies[0].pinned = ()
-    rising.terrains = [Plane(point=(0.0, 0.0, 0.0), motion=Motion(velocity=(0.0, 20.0, 0.0)))]
-    refused(rising, "touched at step")
-
 # --- terrain contact ----------------------------------------------------------------------------
 
 SLOPE = 0.1   # the plane's rise per metre: the cube slides where friction < SLOPE

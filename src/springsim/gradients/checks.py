@@ -3,13 +3,13 @@ run (``check_contact_free``), each a one-line SceneError.
 
 Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are
-soft (pins.py) and attachments, soft or hard (attachments.py); contact with still planes,
-spheres, bowls and meshes (contact.py, implicit_contact.py), and with terrains moving rigidly
-and with deforming meshes under the explicit methods (contact.py); body-body contact
+soft (pins.py) and attachments, soft or hard (attachments.py); contact with planes, spheres,
+bowls and meshes, still or moving rigidly (contact.py, implicit_contact.py), and with deforming
+meshes under the explicit methods (contact.py); body-body contact
 of surfaces (a self-colliding body's own too) and of balls with balls and particles under
 every integrator (body_contact.py, implicit_bodies.py). Not yet covered, so refused rather than
-given a gradient that leaves a force out: contact with moving or deforming terrains under
-implicit_euler, and there hard attachments on bodies that touch a terrain or each other
+given a gradient that leaves a force out: contact with deforming meshes under implicit_euler,
+and there hard attachments on bodies that touch a terrain or each other
 and a fold that closes within a step that touches a terrain (adjoints.py and
 implicit_contact.py refuse these at that step). A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
@@ -42,11 +42,10 @@ def contact_check(simulation, physical=None):
     model = simulation.model
     shapes = (Planes.of(model) if physical is None else physical.planes).shapes
     implicit = simulation.integrator.name == "implicit_euler"
-    followed = [shape is not None
-                and not (implicit and isinstance(shape, (Moving, Deforming)))
+    followed = [shape is not None and not (implicit and isinstance(shape, Deforming))
                 for shape in shapes]
-    covered = ("still planes, spheres, bowls and meshes only under implicit_euler (moving "
-               "rigidly or deforming too under the explicit methods)" if implicit
+    covered = ("planes, spheres, bowls and meshes, still or moving rigidly, only under "
+               "implicit_euler (deforming meshes too under the explicit methods)" if implicit
                else "planes, spheres, bowls and meshes, still, moving rigidly or deforming, "
                "only")
     if all(followed):

@@ -1,5 +1,5 @@
-"""Backward Euler's step with contact with still terrains (planes, spheres, bowls, meshes),
-replayed in NumPy, and its adjoint.
+"""Backward Euler's step with terrain contact (planes, spheres, bowls and meshes, still or moving
+rigidly), replayed in NumPy, and its adjoint.
 
 The forward (integrators/implicit_euler.py with implicit/constraints.py) holds each contact's
 normal velocity at a floor and lets it slide along the surface against a friction damper c (N s/m)
@@ -8,7 +8,7 @@ that it chooses from the solve's own reaction impulses, a few passes a Newton it
     find_constraints          kind, normal, floor of every particle; c carried from the last step
     per Newton iteration k:
       assemble                A_k = (the springs' matrix at x_k) + c_i (I - n n^T) on contacts
-                              b_k = newton_rhs - c_i (I - n n^T) (v + dv)
+                              b_k = newton_rhs - c_i (I - n n^T) (v + dv - s)
                               (first iteration: a carried c capped to the friction cone)
       solve                   S (A ddv - b) = 0 with the contacts' normal components at their
                               floors (z) and the pinned particles' at zero
@@ -32,12 +32,14 @@ Where bodies touch each other in the same step, their penalty contacts (implicit
 had, their friction comes after the Newton iterations and the post-step pass after the impacts;
 the adjoint gives each solve's and each update's cotangents their share.
 
-Each contact's normal and distance are its terrain's at the step's start (``look_up``). On a
-curved terrain the normal turns with that position, so the adjoint also gathers the normal's
-cotangent from everywhere it enters (the held components, the projection the solve keeps, the
-dampers, the impulses and slips the updates read, the restored approach speed) and carries it to
-the start through the terrain's curvature (``held_vjp``); on a plane that cotangent goes
-nowhere and is not gathered.
+Each contact's normal, distance and surface velocity s are its terrain's at the step's start
+positions, with a moving terrain where it is at the step's end (``look_up``); friction and the
+floor act on the velocity relative to s. On a curved terrain the normal turns with the
+position, and on a turning one s changes with it, so the adjoint also gathers the cotangents
+of the normal (from the held components, the projection the solve keeps, the dampers, the
+impulses and slips the updates read, the restored approach speed) and of s, and carries them to
+the start through the terrain's curvature and s's derivative (``held_vjp``); where every
+terrain is a still plane neither is gathered.
 
 The gradient is of the exactly solved step: the forward's CG stops at its tolerance, and the
 difference is of that order (docs/guide/gradients.md).
@@ -62,7 +64,7 @@ from .terrain_shapes import Deforming, Flat, Moving
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
-FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO = 0, 1, 2
+FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO, FLOOR_INSIDE = 0, 1, 2, 3   # inside: -max(phi, 0) / h = 0
 # how a friction damper came about
 KEPT, CAPPED, SLIDING, HOLDING, RELEASED = 0, 1, 2, 3, 4
 
@@ -73,39 +75,52 @@ class Constraints(NamedTuple):
     normal: np.ndarray     # (P, 3)
     floor: np.ndarray      # (P,) m/s
     floor_case: np.ndarray
+    surface: np.ndarray    # (P, 3) m/s, the terrain's surface velocity (0 on a still one)
 
 
-def floor_of(phi, v_n, h, epsilon):
-    """lowest_normal_velocity for arrays: (floor, case)."""
+def floor_of(phi, v_n, s_n, h, epsilon):
+    """lowest_normal_velocity for arrays: (floor, case); s_n the surface's normal velocity
+    (FLOOR_ZERO: the particle slows to it)."""
     outside = phi >= epsilon
     gap = -np.maximum(phi, 0.0) / h
-    low = np.minimum(v_n, 0.0)
-    case = np.where(outside, FLOOR_GAP, np.where(low >= gap, np.where(v_n < 0.0, FLOOR_VELOCITY,
-                                                                       FLOOR_ZERO), FLOOR_GAP))
+    low = s_n + np.minimum(v_n - s_n, 0.0)
+    case = np.where(outside, FLOOR_GAP, np.where(
+        low >= gap, np.where(v_n - s_n < 0.0, FLOOR_VELOCITY, FLOOR_ZERO),
+        np.where(phi > 0.0, FLOOR_GAP, FLOOR_INSIDE)))
     floor = np.where(outside, -phi / h, np.maximum(low, gap))
     return floor, case
 
 
 class HeldBars(NamedTuple):
-    """The cotangents of the contacts' floors and normals, summed over the step's solves."""
+    """The cotangents of the contacts' floors, normals and surface velocities, summed over the
+    step's solves."""
 
     floor: np.ndarray     # (P,)
     normal: object        # (P, 3), or None where every terrain is flat (no curvature)
+    surface: object       # (P, 3), or None where every terrain stands still
 
 
 def held_vjp(constraints, lookups, x, v, bars: HeldBars, h, x_bar, v_bar):
-    """Each contact's floor (-phi / h (FLOOR_GAP), v . n (FLOOR_VELOCITY) or 0) and normal are
-    its terrain's at the step's start: their cotangents go to x through grad phi and the
-    normal's derivative (a curved terrain's; a plane has none), and to v."""
+    """Each contact's floor (-phi / h (FLOOR_GAP), v . n (FLOOR_VELOCITY) or s . n), normal
+    and surface velocity s are its terrain's at the step's start positions (where the terrain
+    is at the step's end): their cotangents go to x through grad phi, the normal's derivative
+    (a curved terrain's; a plane has none) and the surface velocity's (a turning terrain's),
+    and to v."""
     index = np.nonzero(bars.floor)[0]
     case = constraints.floor_case[index]
     g = bars.floor[index]
     phi_bar = np.where(case == FLOOR_GAP, -g / h, 0.0)
     vel = np.where(case == FLOOR_VELOCITY, g, 0.0)
+    slowed = np.where(case == FLOOR_ZERO, g, 0.0)   # to the surface's s . n
     n_bar = np.zeros_like(x) if bars.normal is None else bars.normal.copy()
-    n_bar[index] += vel[:, None] * v[index]
+    s_bar = np.zeros_like(x) if bars.surface is None else bars.surface.copy()
+    n_bar[index] += vel[:, None] * v[index] + slowed[:, None] * constraints.surface[index]
+    s_bar[index] += slowed[:, None] * constraints.normal[index]
     v_bar[index] += vel[:, None] * constraints.normal[index]
     for lookup in lookups:
+        rows = np.nonzero((constraints.terrain == lookup.terrain) & s_bar.any(axis=1))[0]
+        if lookup.surface is not None and len(rows):
+            x_bar[rows] += lookup.shape.velocity_vjp(x[rows], s_bar[rows])
         mine = constraints.terrain[index] == lookup.terrain
         rows = index[mine]
         x_bar[rows] += phi_bar[mine, None] * lookup.shape.gradient(x[rows])
@@ -122,20 +137,23 @@ class Lookup(NamedTuple):
     shape: object         # terrain_shapes' shape
     phi: np.ndarray       # (P,) m
     normal: np.ndarray    # (P, 3)
+    surface: object       # (P, 3) m/s, the surface's velocity there, or None: it stands still
 
 
-def still_terrains(physical):
-    """(t, shape) of every terrain the replay follows: still planes, spheres, bowls and meshes
-    (moving and deforming ones are refused where touched: checks.contact_check)."""
+def replayed_terrains(physical):
+    """(t, shape) of every terrain the replay follows: planes, spheres, bowls and meshes,
+    still or moving rigidly (deforming ones are refused where touched: checks.contact_check)."""
     return [(t, shape) for t, shape in followed(physical.planes)
-            if not isinstance(shape, (Moving, Deforming))]
+            if not isinstance(shape, Deforming)]
 
 
 def look_up(physical, x):
-    """[Lookup] of every followed terrain at the positions x."""
+    """[Lookup] of every followed terrain at the positions x, where the force time has it (the
+    step's end: a moving terrain's pose then, as the forward's step moves the world first)."""
     offset = physical.planes.offset
-    return [Lookup(t, shape, shape.distance(x, offset), np.asarray(shape.normals(x)))
-            for t, shape in still_terrains(physical)]
+    return [Lookup(t, shape, shape.distance(x, offset), np.asarray(shape.normals(x)),
+                   shape.velocity(x) if isinstance(shape, Moving) else None)
+            for t, shape in replayed_terrains(physical)]
 
 
 def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups):
@@ -146,9 +164,10 @@ def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups
     kind = np.where(physical.free, FREE, PINNED).astype(np.int64)
     terrain = np.full(count, -1)
     normal = np.zeros((count, 3))
+    surface = np.zeros((count, 3))
     phi_best, v_n_best = np.zeros(count), np.zeros(count)
     earliest = np.full(count, np.inf)
-    for t, _, phi, n in lookups:
+    for t, _, phi, n, s in lookups:
         v_n = along(v, n)
         reached = phi + h * v_n
         touching = ((phi < epsilons[t]) | (reached < epsilons[t])) & physical.free
@@ -156,13 +175,15 @@ def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups
         terrain[better], earliest[better] = t, reached[better]
         phi_best[better], v_n_best[better] = phi[better], v_n[better]
         normal[better] = n[better]
+        if s is not None:
+            surface[better] = s[better]
     contact = terrain >= 0
     kind[contact] = CONTACT
     epsilon = epsilons[np.maximum(terrain, 0)]
-    floor, case = floor_of(phi_best, v_n_best, h, epsilon)
+    floor, case = floor_of(phi_best, v_n_best, rowdot(surface, normal), h, epsilon)
     floor[~contact] = 0.0
     continues = contact & (previous_kind == CONTACT) & (previous_terrain == terrain)
-    return Constraints(kind, terrain, normal, floor, case), continues
+    return Constraints(kind, terrain, normal, floor, case, surface), continues
 
 
 def touches_terrains(physical, h, start, end) -> bool:
@@ -172,7 +193,7 @@ def touches_terrains(physical, h, start, end) -> bool:
     (solve.py), which is quicker."""
     planes = physical.planes
     (x, v), x_end = start[:2], end[0]
-    for t, shape in still_terrains(physical):
+    for t, shape in replayed_terrains(physical):
         phi = shape.distance(x, planes.offset)
         reach = np.minimum(phi, phi + h * along(v, shape.normals(x)))
         near = np.minimum(reach, shape.distance(x_end, planes.offset))
@@ -276,7 +297,8 @@ def held(constraints, kind, u0):
 
 
 def friction_terms(kind, normal, c, u0):
-    """(the dampers' blocks as a sparse matrix, their share of b: -c (I - n n^T) u0)."""
+    """(the dampers' blocks as a sparse matrix, their share of b: -c (I - n n^T) u0, u0 the
+    velocity relative to the terrain's surface)."""
     on = (kind == CONTACT) & (c != 0.0)
     blocks = np.zeros((len(c), 3, 3))
     n = normal[on]
@@ -299,7 +321,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     normal = constraints.normal.copy()
     terrain = constraints.terrain.copy()
     floor, floor_case = constraints.floor.copy(), constraints.floor_case.copy()
-    constraints = Constraints(kind, terrain, normal, floor, floor_case)   # grows in place
+    constraints = Constraints(kind, terrain, normal, floor, floor_case,
+                              constraints.surface.copy())   # grows in place
     c = np.where(continues, c_memory, 0.0)
     dv = np.zeros_like(x)
     record = []
@@ -391,7 +414,7 @@ def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
     index = np.nonzero((kind == CONTACT) & (c != 0.0))[0]
     n = constraints.normal[index]
     gap = constraints.floor[index] - rowdot(u0[index], n)
-    slip = np.linalg.norm(tangential(u0[index], n), axis=1)
+    slip = np.linalg.norm(tangential(u0[index] - constraints.surface[index], n), axis=1)
     along_normal = np.einsum("ki,kij,kj->k", n, blocks[index], n)
     impulse = -rowdot(b_sp[index], n) + gap * along_normal
     coulomb = physical.friction[constraints.terrain[index]] * np.maximum(impulse, 0.0)
@@ -412,7 +435,7 @@ def pushes(kind, normal, matrix, b_sp, ddv):
 
 def solve_step(physical, constraints, kind, matrix, b_sp, u0, c):
     """ddv with S (A ddv - b) = 0 and its constrained components held (z)."""
-    friction, share = friction_terms(kind, constraints.normal, c, u0)
+    friction, share = friction_terms(kind, constraints.normal, c, u0 - constraints.surface)
     z = held(constraints, kind, u0)
     a = matrix + friction
     return solve_reduced(a, b_sp + share, z, basis(kind, constraints.normal))
@@ -469,11 +492,13 @@ def update_contacts(physical, h, v, constraints, kind, matrix, blocks, b_sp, u0,
                     best, earliest = lookup, reached
             if best is not None:
                 n = best.normal[i]
-                floor, case = floor_of(np.array([best.phi[i]]), np.array([v[i] @ n]), h,
-                                       epsilons[best.terrain])
+                s = np.zeros(3) if best.surface is None else best.surface[i]
+                floor, case = floor_of(np.array([best.phi[i]]), np.array([v[i] @ n]),
+                                       np.array([s @ n]), h, epsilons[best.terrain])
                 kind[i] = CONTACT
                 constraints.terrain[i] = best.terrain
                 constraints.normal[i] = n
+                constraints.surface[i] = s
                 constraints.floor[i], constraints.floor_case[i] = floor[0], case[0]
                 c_new[i] = 0.0
                 grown.append(i)
@@ -485,7 +510,8 @@ def update_contacts(physical, h, v, constraints, kind, matrix, blocks, b_sp, u0,
             c_new[i] = 0.0
             released.append(i)
             continue
-        t_u = u[i] - (u[i] @ n) * n
+        relative = u[i] - constraints.surface[i]
+        t_u = relative - (relative @ n) * n
         slip = np.sqrt(t_u @ t_u)
         coulomb = physical.friction[constraints.terrain[i]] * impulse
         block = blocks[i]
@@ -524,13 +550,15 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
         out_x += start_bar
     x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
     curved = any(not isinstance(lookup.shape, Flat) for lookup in record.lookups)
-    held_bar = HeldBars(np.zeros(len(x)), np.zeros_like(x) if curved else None)
+    moving = any(lookup.surface is not None for lookup in record.lookups)
+    held_bar = HeldBars(np.zeros(len(x)), np.zeros_like(x) if curved or moving else None,
+                        np.zeros_like(x) if moving else None)
     # restore_impact_speeds: v_k + (v . n - v_k . n) n
     vk_bar = v_end_bar.copy()
     rows = record.restored
     if len(rows):
         gn = rowdot(vk_bar[rows], normal[rows])
-        if curved:
+        if held_bar.normal is not None:
             moved = v[rows] - record.end[2][rows]
             held_bar.normal[rows] += (rowdot(moved, normal[rows])[:, None] * vk_bar[rows]
                                       + gn[:, None] * moved)
@@ -652,8 +680,11 @@ def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar,
     matrix_vjp(physical, h, estimate, ddv, -lam, estimate_bar, bar)
     n = normal[contact]
     lam_t = tangential(lam[contact], n)
-    c_bar[contact] -= rowdot(lam_t, ddv[contact]) + rowdot(lam_t, u0[contact])
+    surface = constraints.surface[contact]
+    c_bar[contact] -= rowdot(lam_t, ddv[contact]) + rowdot(lam_t, u0[contact] - surface)
     u0_bar[contact] -= c[contact, None] * lam_t
+    if held_bar.surface is not None:   # the dampers act on the velocity relative to s
+        held_bar.surface[contact] += c[contact, None] * lam_t
     rest = ddv_bar - (matrix @ lam.ravel()).reshape(lam.shape)
     gap_bar = rowdot(rest[contact], n)
     held_bar.floor[contact] += gap_bar
@@ -664,7 +695,7 @@ def solve_adjoint(physical, h, estimate, matrix, constraints, step, u0, ddv_bar,
         u = u0[contact] + ddv[contact]
         lam_c = lam[contact]
         held_bar.normal[contact] += (-gap_bar[:, None] * u + step.push[contact, None] * lam_c
-                                     + (c[contact] * rowdot(u, n))[:, None] * lam_c)
+                                     + (c[contact] * rowdot(u - surface, n))[:, None] * lam_c)
     return lam
 
 
@@ -693,10 +724,12 @@ def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, 
     np.add.at(bar.friction, constraints.terrain[index], coulomb_bar * impulse)
     impulse_bar = coulomb_bar * mu
     n = constraints.normal[index]
-    u_t = tangential(u0[index] + ddv[index], n)
-    direction = u_t / np.where(slip > 0.0, slip, 1.0)[:, None]
+    relative = u0[index] + ddv[index] - constraints.surface[index]
+    direction = tangential(relative, n) / np.where(slip > 0.0, slip, 1.0)[:, None]
     u0_bar[index] += slip_bar[:, None] * direction
     ddv_bar[index] += slip_bar[:, None] * direction
+    if held_bar.surface is not None:
+        held_bar.surface[index] -= slip_bar[:, None] * direction
     # impulse = n . (A_sp ddv - b_sp)_i
     g_r = np.zeros_like(u0)
     g_r[index] = impulse_bar[:, None] * n
@@ -708,7 +741,7 @@ def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, 
     if held_bar.normal is not None:   # impulse = n . R, u_t = (I - n n^T) u, n^T B n
         held_bar.normal[index] += (
             impulse_bar[:, None] * update.reaction
-            - (slip_bar * rowdot(u0[index] + ddv[index], n))[:, None] * direction
+            - (slip_bar * rowdot(relative, n))[:, None] * direction
             - stiff_bar[:, None] * np.einsum("kij,kj->ki", blocks[index], n))
     return g_r
 
@@ -729,7 +762,11 @@ def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, h
     np.add.at(bar.friction, constraints.terrain[index], coulomb_bar * np.maximum(impulse, 0.0))
     impulse_bar = coulomb_bar * mu
     n = constraints.normal[index]
-    u0_bar[index] += (slip_bar / safe)[:, None] * tangential(u0[index], n)
+    relative = u0[index] - constraints.surface[index]
+    slipping = (slip_bar / safe)[:, None] * tangential(relative, n)
+    u0_bar[index] += slipping
+    if held_bar.surface is not None:
+        held_bar.surface[index] -= slipping
     b_bar[index] -= impulse_bar[:, None] * n
     blocks = diagonal_blocks(physical, *estimate, h)[index]
     block_n = np.einsum("kij,kj->ki", blocks, n)
@@ -740,7 +777,7 @@ def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, h
         held_bar.normal[index] += (
             impulse_bar[:, None] * (2.0 * gap[:, None] * block_n - b_rows)
             - gap_bar[:, None] * u0[index]
-            - ((slip_bar / safe) * rowdot(u0[index], n))[:, None] * tangential(u0[index], n))
+            - ((slip_bar / safe) * rowdot(relative, n))[:, None] * tangential(relative, n))
     weights[index] += (impulse_bar * gap)[:, None, None] * n[:, :, None] * n[:, None, :]
 
 
