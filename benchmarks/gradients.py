@@ -4,6 +4,7 @@
     .venv/bin/python benchmarks/gradients.py cube [--duration 1] [--repeats 3]
     .venv/bin/python benchmarks/gradients.py stack [--duration 0.5] [--repeats 2]
     .venv/bin/python benchmarks/gradients.py stack-implicit [--duration 0.5] [--repeats 1]
+    .venv/bin/python benchmarks/gradients.py landing-implicit [--duration 2] [--repeats 2]
     .venv/bin/python benchmarks/gradients.py memory [--duration 10]
 
 ``cloth``: the 100 x 100 hanging cloth (cloth-hang, self-collision off) under implicit_euler at
@@ -11,7 +12,9 @@ dt = 1/60 s; ``cube``: the default jelly cube (jelly-plane) under rk4 at dt = 1e
 jelly-stack's three cubes under rk4 at dt = 1e-3 s, which land on the floor and on each other
 (the adjoint's NumPy path through terrain and body-body contact); ``stack-implicit``: the same
 under implicit_euler at dt = 1/60 s (the contact replay with the penalty contacts beside the
-terrain constraints, solved directly). Each repeat
+terrain constraints, solved directly); ``landing-implicit``: the default cube (jelly-plane)
+under implicit_euler at dt = 1/60 s, which lands on the floor after 1.3 s and rests there (the
+terrain replay's solves of 3,000 unknowns). Each repeat
 times the forward run (``Simulation.advance``) and then the gradient of the mean height at 30 fps
 with respect to the structural ks (``springsim.gradient``: the forward run again, recording,
 and the backward pass), alternately, since the machine's speed drifts; it prints both and their
@@ -39,6 +42,7 @@ CASES = {
     "cube": ("jelly-plane", [], "rk4", 1e-3),
     "stack": ("jelly-stack", [], "rk4", 1e-3),
     "stack-implicit": ("jelly-stack", [], "implicit_euler", 1 / 60),
+    "landing-implicit": ("jelly-plane", [], "implicit_euler", 1 / 60),
 }
 
 

@@ -303,7 +303,9 @@ def friction_terms(kind, normal, c, u0):
     blocks = np.zeros((len(c), 3, 3))
     n = normal[on]
     blocks[on] = c[on, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
-    matrix = sparse.block_diag(list(blocks), format="csr")
+    count = len(c)
+    matrix = sparse.bsr_matrix((blocks, np.arange(count), np.arange(count + 1)),
+                               shape=(3 * count, 3 * count)).tocsr()
     share = np.zeros_like(u0)
     share[on] = -c[on, None] * tangential(u0[on], n)
     return matrix, share
@@ -442,31 +444,30 @@ def solve_step(physical, constraints, kind, matrix, b_sp, u0, c):
 
 
 def basis(kind, normal):
-    """Q: orthonormal columns spanning the components no constraint fixes (3P, r)."""
-    rows, cols, values = [], [], []
-    column = 0
-    for i in range(len(kind)):
-        if kind[i] == FREE:
-            for c in range(3):
-                rows.append(3 * i + c)
-                cols.append(column)
-                values.append(1.0)
-                column += 1
-        elif kind[i] == CONTACT:
-            for t in tangents(normal[i]):
-                for c in range(3):
-                    rows.append(3 * i + c)
-                    cols.append(column)
-                    values.append(t[c])
-                column += 1
-    return sparse.csr_matrix((values, (rows, cols)), shape=(3 * len(kind), column))
+    """Q: orthonormal columns spanning the components no constraint fixes (3P, r): a free
+    particle's three axes, a contact's two tangents, none of a pinned one's, in particle
+    order."""
+    free, contact = np.nonzero(kind == FREE)[0], np.nonzero(kind == CONTACT)[0]
+    width = np.zeros(len(kind), np.int64)
+    width[free], width[contact] = 3, 2
+    first = np.cumsum(width) - width   # each particle's first column
+    axes, shape = np.arange(3), (len(contact), 2, 3)   # a contact's tangent k, component c
+    rows = [(3 * free[:, None] + axes).ravel(),
+            np.broadcast_to(3 * contact[:, None, None] + axes, shape).ravel()]
+    cols = [(first[free][:, None] + axes).ravel(),
+            np.broadcast_to(first[contact][:, None, None] + np.arange(2)[:, None], shape).ravel()]
+    values = [np.ones(3 * len(free)), np.stack(tangents(normal[contact]), axis=1).ravel()]
+    return sparse.csr_matrix((np.concatenate(values), (np.concatenate(rows),
+                                                       np.concatenate(cols))),
+                             shape=(3 * len(kind), int(width.sum())))
 
 
 def tangents(n):
-    e = np.zeros(3)
-    e[np.argmin(np.abs(n))] = 1.0
+    """Two unit tangents of each normal (K, 3): across the axis the normal leans on least."""
+    e = np.zeros_like(n)
+    e[np.arange(len(n)), np.argmin(np.abs(n), axis=1)] = 1.0
     t1 = np.cross(n, e)
-    t1 /= np.linalg.norm(t1)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
     return t1, np.cross(n, t1)
 
 
