@@ -359,13 +359,14 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             c[cap[0]] = lowered
         c_start = c.copy()
         steps = []
-        ddv = solve_step(physical, constraints, kind, *full(), u0, c)
-        steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *full(), ddv),
+        system = full()   # the penalty contacts' active set changes only in penalty.update
+        ddv = solve_step(physical, constraints, kind, *system, u0, c)
+        steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *system, ddv),
                            active()))
         for _ in range(MAX_CONTACT_UPDATES):
             solved_with = active()
-            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, full()[0],
-                                                  blocks, full()[1], u0, c, ddv, lookups)
+            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, system[0],
+                                                  blocks, system[1], u0, c, ddv, lookups)
             steps.append(update._replace(active=solved_with))
             bodies_changed = penalty is not None and penalty.update(ddv)
             moved = np.sum(np.abs(c_new[update.index] - c[update.index])
@@ -375,8 +376,9 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             c = c_new
             if not (changed or moved > FRICTION_SETTLED * total):
                 break
-            ddv = solve_step(physical, constraints, kind, *full(), u0, c)
-            steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *full(), ddv),
+            system = full()
+            ddv = solve_step(physical, constraints, kind, *system, u0, c)
+            steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *system, ddv),
                                active()))
         if penalty is not None and penalty.regrow(dv, ddv):
             raise SceneError("self_collision", True, "a body's surface folds onto itself within "
