@@ -247,6 +247,31 @@ def test_fit_command_recovers_stiffness(tmp_path, capsys):
     assert "ks = " in out.read_text()
 
 
+def test_fit_keeps_friction_in_its_range():
+    """A take of the cube sliding down the tilted plane without friction, fitted from friction
+    0.1: the loss falls toward 0 and beyond it (where no scene runs), so the fit must stop at
+    the range's end, 0, instead of stepping below it."""
+    import springsim
+    from springsim.gradients.fit import fit
+    from springsim.gradients.losses import ObservedTake
+
+    def sliding(friction):
+        scene = tilted_scene("lands and slides")
+        scene.terrains[0].friction = friction
+        return scene
+
+    simulation = springsim.Simulation(sliding(0.0), integrator="rk4", dt=0.002)
+    times, frames = [0.0], [simulation.positions.copy()]
+    for _ in range(10):
+        simulation.step(5)
+        times.append(simulation.time)
+        frames.append(simulation.positions.copy())
+    observed = ObservedTake({"time": np.array(times), "positions": np.array(frames)})
+    result = fit(sliding(0.1), observed, ["terrains.0.friction"], 0.1, integrator="rk4",
+                 dt=0.002)
+    assert 0.0 <= result.values["terrains.0.friction"] < 1e-3
+
+
 @pytest.mark.parametrize("scene_of", [small_scene, lambda: tilted_scene("lands and slides")],
                          ids=["free", "contact"])
 def test_implicit_gradient_is_of_what_was_computed(scene_of):

@@ -3,8 +3,10 @@
 Positive parameters (stiffness, damping, masses, rest lengths, drag, a stiffness field) are
 fitted in log space, so that a step can never make them negative and a factor of two up or down
 is the same distance; the rest (gravity, initial state) as they are. Bounds: a positive
-parameter stays within ``BOUND_FACTOR`` of its starting value either way. Deterministic: the
-same scene and take give the same iterates.
+parameter stays within ``BOUND_FACTOR`` of its starting value either way; a friction within
+[0, inf) and a restitution within [0, 1], the ranges a scene allows (``RANGES``), so that no
+trial step asks for a scene that cannot run. Deterministic: the same scene and take give the
+same iterates.
 """
 from dataclasses import dataclass, field
 
@@ -18,6 +20,9 @@ BOUND_FACTOR = 1000.0
 DIVERGED_LOSS = 1e6   # the loss (over the starting loss) of trial values whose run blows up
 POSITIVE_WORDS = ("ks", "kd", "mass", "masses", "particle_mass", "drag", "rest_lengths",
                   "stiffness_field", "spring_ks", "spring_kd")
+RANGES = {"friction": (0.0, None), "particle_friction": (0.0, None),
+          "restitution": (0.0, 1.0), "ball_restitution": (0.0, 1.0),
+          "particle_restitution": (0.0, 1.0)}   # of the rest, by the name's last word
 
 
 @dataclass
@@ -67,7 +72,8 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
     for p in params:
         for value in starts[p.name].ravel():
             bounds.append((np.log(value) - np.log(BOUND_FACTOR), np.log(value)
-                           + np.log(BOUND_FACTOR)) if is_positive(p.name) else (None, None))
+                           + np.log(BOUND_FACTOR)) if is_positive(p.name)
+                          else RANGES.get(p.name.split(".")[-1], (None, None)))
     evaluations = [0]
     last, scale = {}, {}
 
