@@ -4,6 +4,7 @@
     .venv/bin/python benchmarks/fits.py cube [--integrator implicit_euler --dt 0.01]
     .venv/bin/python benchmarks/fits.py regions [--size 20]
     .venv/bin/python benchmarks/fits.py cube-flat
+    .venv/bin/python benchmarks/fits.py cube-default
 
 ``cloth``: cloth-hang (SIZE x SIZE particles, self-collision off) under implicit_euler at
 dt = 0.01 s; a 2 s take at 50 fps with 0.5 mm of Gaussian noise (seed 0) added to every
@@ -22,6 +23,13 @@ the same landing under another method (the take made with it too).
 (friction 0.3, restitution 0.5), dropped from 0.1 m with 1 m/s along the slope under rk4 at
 dt = 2e-3 s: it lands flat, slides and slows (0.2 m/s left after the 2 s take, 0.5 mm noise);
 structural ks and kd from half and twice (the other kinds at their true values).
+
+``cube-default``: the default jelly cube (10 x 10 x 10, edge 4 m, ks = 2000 N/m and kd = 60 N s/m
+for every kind) on jelly-tilted's plane, tilted less (a rise of 0.3 per metre; friction 0.5,
+restitution 0.5) so that a cube can rest on it (on the 45 degree plane a cube tips over its
+lower edge whatever the friction): turned to lie flat 0.25 m above it and launched at 2 m/s down
+the slope, under rk4 at its default dt = 1e-3 s, it lands, slides about a metre, rocks and
+comes to rest within the 2 s take (0.5 mm noise); structural ks and kd from half and twice.
 
 ``regions``: cloth-hang (SIZE x SIZE, implicit_euler, dt = 0.01 s) whose springs right of
 x = 0 are 4 times as stiff as those left of it (``bodies.0.stiffness_regions.x=0`` = [1, 4]); a
@@ -125,6 +133,28 @@ def cube_flat():
     run_fits(scene_with(1.0), options, 2.0, truth, lambda scene, factor: scene_with(factor))
 
 
+def cube_default():
+    slope, speed, gap = 0.3, 2.0, 0.25
+    angle = float(np.arctan(slope))
+    normal = np.array([np.sin(angle), np.cos(angle), 0.0])
+    down = np.array([np.cos(angle), -np.sin(angle), 0.0])
+    centre, velocity = ((2.0 + gap) * normal).tolist(), (speed * down).tolist()
+
+    def scene_with(factor):
+        return springsim.load_scene("jelly-tilted", [
+            f"terrains.0.normal=[{slope},1,0]", "terrains.0.friction=0.5",
+            "terrains.0.restitution=0.5", "bodies.0.rotation_axis=[0,0,1]",
+            f"bodies.0.rotation_degrees={-float(np.degrees(angle))!r}",
+            f"bodies.0.position=[{centre[0]!r},{centre[1]!r},0.0]",
+            f"bodies.0.velocity=[{velocity[0]!r},{velocity[1]!r},0.0]",
+            f"bodies.0.structural.ks={2000.0 * factor!r}",
+            f"bodies.0.structural.kd={60.0 * factor!r}"])
+
+    options = {"integrator": "rk4", "dt": 1e-3}
+    truth = {"bodies.0.structural.ks": 2000.0, "bodies.0.structural.kd": 60.0}
+    run_fits(scene_with(1.0), options, 2.0, truth, lambda scene, factor: scene_with(factor))
+
+
 def regions(size):
     import tempfile
     from pathlib import Path
@@ -160,7 +190,8 @@ def regions(size):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("case", choices=["cloth", "cube", "cube-flat", "regions"])
+    parser.add_argument("case", choices=["cloth", "cube", "cube-flat", "cube-default",
+                                         "regions"])
     parser.add_argument("--size", type=int, default=10)
     parser.add_argument("--integrator", default="rk4", help="cube only")
     parser.add_argument("--dt", type=float, default=2e-3, help="cube only")
@@ -171,6 +202,8 @@ def main() -> None:
         cube(args.integrator, args.dt)
     elif args.case == "cube-flat":
         cube_flat()
+    elif args.case == "cube-default":
+        cube_default()
     else:
         regions(args.size if args.size != 10 else 20)
 
