@@ -36,26 +36,18 @@ from .terrain_shapes import Deforming, Moving, shape_of, surface_velocity
 
 
 class Planes(NamedTuple):
-    """The model's terrains as contact needs them: one row per terrain (non-planes have NaN
-    points; checks.py refuses touching them)."""
+    """The model's terrains as contact needs them: one row per terrain (a terrain without a
+    shape is not followed; checks.py refuses touching it)."""
 
-    point: np.ndarray       # (T, 3) m
-    normal: np.ndarray      # (T, 3) unit
     epsilon: np.ndarray     # (T,) m, the contact band
     offset: np.ndarray      # (P,) m, kept between a particle and a terrain
-    is_plane: np.ndarray    # (T,) bool
     resting_speed: np.ndarray   # (T,) m/s, approaches slower than this do not bounce
     shapes: tuple = ()      # (T,) terrain_shapes' shape of each terrain followed, or None
 
     @classmethod
     def of(cls, model, clock=None) -> "Planes":
         """``clock``: the adjoint's (clock.py), which the moving terrains' shapes read."""
-        from ..terrains import Plane
-
         arrays = model.arrays
-        count = len(model.terrains)
-        point, normal = np.full((count, 3), np.nan), np.full((count, 3), np.nan)
-        is_plane = np.zeros(count, bool)
         shapes = []
         clock = np.zeros(2) if clock is None else clock
         for t, terrain in enumerate(model.terrains):
@@ -66,20 +58,11 @@ class Planes(NamedTuple):
             if shape is not None and motion >= 0 and deforming < 0:
                 shape = Moving(shape, int(motion), arrays.motion_info, arrays.motion_keys, clock)
             shapes.append(shape)
-            if isinstance(terrain, Plane) and motion < 0 and deforming < 0:
-                point[t], normal[t], is_plane[t] = row[0:3], row[3:6], True
         g = arrays.gravity
         g_size = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
         epsilon = arrays.terrain_epsilon.astype(float)
-        return cls(point, normal, epsilon, arrays.terrain_offset.astype(float), is_plane,
+        return cls(epsilon, arrays.terrain_offset.astype(float),
                    np.sqrt(2.0 * g_size * epsilon), tuple(shapes))
-
-
-def plane_distance(planes: Planes, t: int, x: np.ndarray) -> np.ndarray:
-    """phi of every particle to plane t, as plane_distance and the dispatcher compute it."""
-    p, n = planes.point[t], planes.normal[t]
-    return ((x[:, 0] - p[0]) * n[0] + (x[:, 1] - p[1]) * n[1] + (x[:, 2] - p[2]) * n[2]
-            - planes.offset)
 
 
 def along(u: np.ndarray, n: np.ndarray) -> np.ndarray:

@@ -359,14 +359,13 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             c[cap[0]] = lowered
         c_start = c.copy()
         steps = []
-        system = full()   # the penalty contacts' active set changes only in penalty.update
-        ddv = solve_step(physical, constraints, kind, *system, u0, c)
-        steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *system, ddv),
-                           active()))
+        # the penalty contacts' active set changes only in penalty.update
+        ddv, reaction = solve_step(physical, constraints, kind, *full(), u0, c)
+        steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, reaction), active()))
         for _ in range(MAX_CONTACT_UPDATES):
             solved_with = active()
-            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, system[0],
-                                                  blocks, system[1], u0, c, ddv, lookups)
+            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, blocks,
+                                                  reaction, u0, c, ddv, lookups)
             steps.append(update._replace(active=solved_with))
             bodies_changed = penalty is not None and penalty.update(ddv)
             moved = np.sum(np.abs(c_new[update.index] - c[update.index])
@@ -376,9 +375,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             c = c_new
             if not (changed or moved > FRICTION_SETTLED * total):
                 break
-            system = full()
-            ddv = solve_step(physical, constraints, kind, *system, u0, c)
-            steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, *system, ddv),
+            ddv, reaction = solve_step(physical, constraints, kind, *full(), u0, c)
+            steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, reaction),
                                active()))
         if penalty is not None and penalty.regrow(dv, ddv):
             raise SceneError("self_collision", True, "a body's surface folds onto itself within "
@@ -430,19 +428,20 @@ def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
         slip > 0.0, coulomb[over] / np.where(slip > 0.0, slip, 1.0), 0.0)
 
 
-def pushes(kind, normal, matrix, b_sp, ddv):
-    """n . (A ddv - b) of each contact after a solve (0 elsewhere): the friction's share of
-    A ddv - b has no part along n."""
-    reaction = (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp
+def pushes(kind, normal, reaction):
+    """n . R of each contact after a solve (0 elsewhere), R = A_sp ddv - b_sp: the friction's
+    share of A ddv - b has no part along n."""
     return np.where(kind == CONTACT, rowdot(reaction, normal), 0.0)
 
 
 def solve_step(physical, constraints, kind, matrix, b_sp, u0, c):
-    """ddv with S (A ddv - b) = 0 and its constrained components held (z)."""
+    """(ddv with S (A ddv - b) = 0 and its constrained components held (z), the reaction
+    R = A_sp ddv - b_sp without the dampers, which the push and the update read)."""
     friction, share = friction_terms(kind, constraints.normal, c, u0 - constraints.surface)
     z = held(constraints, kind, u0)
     a = matrix + friction
-    return solve_reduced(a, b_sp + share, z, basis(kind, constraints.normal))
+    ddv = solve_reduced(a, b_sp + share, z, basis(kind, constraints.normal))
+    return ddv, (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp
 
 
 def basis(kind, normal):
@@ -473,12 +472,10 @@ def tangents(n):
     return t1, np.cross(n, t1)
 
 
-def update_contacts(physical, h, v, constraints, kind, matrix, blocks, b_sp, u0, c, ddv,
-                    lookups):
+def update_contacts(physical, h, v, constraints, kind, blocks, reaction, u0, c, ddv, lookups):
     """constraints.update_contacts: (Update, the dampers after it, whether a contact was
     added). ``kind`` and ``constraints`` grow in place as the forward's do."""
     epsilons = physical.planes.epsilon
-    reaction = (matrix @ ddv.ravel()).reshape(ddv.shape) - b_sp   # friction's share has no n part
     u = u0 + ddv
     c_new = c.copy()
     index, cases, slips, impulses, stiffs, slides, released = [], [], [], [], [], [], []

@@ -31,8 +31,7 @@ from .wind import blows, outer_weights, wind_blocks, wind_blocks_vjp, wind_force
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
 # unknowns up to which a sparse LU solves (exact, and quick there); beyond, CG: a body's 3D
-# lattice fills its factors in (the default cube's 3,000: LU 0.26 to 0.63 s, CG 0.03 s), a
-# cloth's less (40 x 40: LU 0.07 s, CG 0.14 s)
+# lattice fills LU's factors in (performance page, "Gradients")
 DIRECT_LIMIT = 1000
 
 
