@@ -123,6 +123,9 @@ def parts() -> None:
     table = run_kernels.entry_table(layout, p.ks, p.kd, p.rest)
     loose = tuple(values[layout.loose] for values in (p.a, p.b, p.ks, p.kd, p.rest))
     columns = np.empty((run_kernels.ROWS, len(x)))
+    kept = np.empty((1, 4, len(x), 3))
+    simulation.step_keeping(kept, np.empty((1, 2, len(x), 3)))
+    kept = kept[0]
     calls = {
         "forward rk4 step": lambda: simulation.step(1),
         "force loop": lambda: kernels.add_spring_forces(p.a, p.b, p.ks, p.kd, p.rest, x, v,
@@ -132,7 +135,12 @@ def parts() -> None:
                                                            bar.rest),
         "rk4 step adjoint": lambda: run_kernels.rk4_step_vjp(
             layout, table, loose, (p.inv_mass, p.drag, p.gravity), options["dt"], x, v, x_bar,
-            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns),
+            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns,
+            np.empty((0, len(x), 3))),
+        "the same, the stages kept": lambda: run_kernels.rk4_step_vjp(
+            layout, table, loose, (p.inv_mass, p.drag, p.gravity), options["dt"], x, v, x_bar,
+            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns,
+            kept),
     }
     print(f"cube: {len(x)} particles, {len(p.a)} springs")
     for _ in range(3):

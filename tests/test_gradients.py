@@ -130,7 +130,8 @@ def test_checkpoints_give_the_same_gradient():
     loss = as_loss(weighted_squares, 100)
     kept = run_gradient(simulation, loss, 0.04)
     _, simulation, _params = prepare(scene, names, integrator="rk4", dt=0.002)
-    strided = run_gradient(simulation, loss, 0.04, memory_limit=27 * 48 * 8)
+    # room for 8 of the 27 particles' steps, each (x, v) and rk4's four stages' accelerations
+    strided = run_gradient(simulation, loss, 0.04, memory_limit=8 * 27 * (6 + 12) * 8)
     assert strided.stored_bytes < kept.stored_bytes
     np.testing.assert_array_equal(kept.v0_bar, strided.v0_bar)
     np.testing.assert_array_equal(kept.bar.ks, strided.bar.ks)
@@ -382,11 +383,49 @@ def test_the_rk4_step_adjoint_in_runs_matches_numpy(monkeypatch):
     v = rng.standard_normal(x.shape)
     x_bar, v_bar = rng.standard_normal(x.shape), rng.standard_normal(x.shape)
     adjoint = RK4Adjoint(sim.integrator, sim.model)
+    # the stages' accelerations as the forward's step keeps them (tape.py), for the kernel to
+    # take instead of evaluating its own: at the scene's own stiffness, which the forward has
+    sim.state.positions[:], sim.state.velocities[:] = x, v
+    kept, starts = np.empty((1, sim.keeps_stages(), len(x), 3)), np.empty((1, 2, len(x), 3))
+    sim.step_keeping(kept, starts)
+    kept = kept[0]
+    cases = ((physical, RK4Adjoint.step_vjp, None), (physical, ExplicitAdjoint.step_vjp, None),
+             (Physical.of(sim.model), RK4Adjoint.step_vjp, kept),
+             (Physical.of(sim.model), ExplicitAdjoint.step_vjp, None))
     results = []
-    for step_vjp in (RK4Adjoint.step_vjp, ExplicitAdjoint.step_vjp):
-        bar = Cotangents.zeros(physical)
-        got = step_vjp(adjoint, physical, 1e-3, (x, v), (x, v), x_bar, v_bar, bar)
+    for parameters, step_vjp, stages in cases:
+        bar = Cotangents.zeros(parameters)
+        got = step_vjp(adjoint, parameters, 1e-3, (x, v), (x, v), x_bar, v_bar, bar, stages)
         results.append((*got, bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity))
-    for fast, numpy_reference in zip(*results):
+    for fast, numpy_reference in [*zip(*results[:2]), *zip(*results[2:])]:
         scale = np.max(np.abs(numpy_reference))
         np.testing.assert_allclose(fast, numpy_reference, rtol=0, atol=1e-12 * scale)
+
+
+def test_a_run_keeping_its_stages_is_the_same_run():
+    """Simulation.step_keeping (the gradient's tape under rk4) takes the same steps, bit for bit,
+    as step(1) a call, through a cube's landing on a tilted plane and resting there, and keeps
+    each step's start; what it keeps of the stages are their accelerations, whose RK4
+    combination is the step's change in velocity (off contact)."""
+    import springsim
+
+    scene = springsim.load_scene("jelly-tilted", ["bodies.0.particles_per_edge=4",
+                                                  "bodies.0.position=[2, 3.5, 0]"])
+    plain = springsim.Simulation(scene, integrator="rk4", dt=2e-3)
+    keeping = springsim.Simulation(scene, integrator="rk4", dt=2e-3)
+    assert keeping.keeps_stages() == 4
+    steps, particles = 200, plain.model.particle_count
+    kept, starts = np.empty((steps, 4, particles, 3)), np.empty((steps, 2, particles, 3))
+    keeping.step_keeping(kept, starts)
+    for n in range(steps):
+        np.testing.assert_array_equal(starts[n, 0], plain.positions)
+        np.testing.assert_array_equal(starts[n, 1], plain.velocities)
+        plain.step(1)
+    np.testing.assert_array_equal(keeping.positions, plain.positions)
+    np.testing.assert_array_equal(keeping.velocities, plain.velocities)
+    change = 2e-3 / 6 * (kept[0, 0] + 2 * kept[0, 1] + 2 * kept[0, 2] + kept[0, 3])
+    np.testing.assert_allclose(starts[1, 1] - starts[0, 1], change, rtol=0, atol=1e-12)
+    # one call's clock: its start plus n h (step by step, the sum rounds otherwise)
+    assert keeping.time == steps * 2e-3 and keeping.steps_taken == plain.steps_taken == steps
+    x = keeping.positions
+    assert np.min(x[:, 0] + x[:, 1]) / np.sqrt(2.0) < 0.011   # on the plane, within its band

@@ -27,6 +27,12 @@ both, LLVM keeps one body under that name, and argsort runs sort's partition (nu
 wrong contact orders, or a crash. ``distinct_function_ids`` starts each process's counter at a
 random 63-bit offset, so that no two processes share an id (tests/test_cache.py rebuilds the
 collision).
+
+LLVM vectorizes a loop whose stores it cannot prove apart from its loads only behind runtime
+checks, and by default gives up beyond 8 of them (``runtime-memory-check-threshold``): a loop
+over springs that writes nine results (the adjoint's, gradients/run_kernels.py) compiled to
+scalar code. ``allow_memory_checks`` raises the limits at import, before any kernel compiles;
+the checks change no result (a loop's iterations do the same arithmetic, in lanes).
 """
 import ast
 import hashlib
@@ -38,11 +44,13 @@ import shutil
 import time
 from pathlib import Path
 
+import llvmlite.binding as llvm
 import numba
 from numba import njit
 from numba.core.bytecode import FunctionIdentity
 
 FASTMATH = False   # strict IEEE arithmetic: the same bits however compiled (module doc)
+MEMORY_CHECKS = 256   # runtime alias checks a vectorized loop may take (module doc)
 STALE_DAYS = 30
 
 
@@ -137,7 +145,15 @@ def distinct_function_ids() -> None:
     FunctionIdentity._unique_ids = itertools.count(secrets.randbits(63))
 
 
+def allow_memory_checks() -> None:
+    """Let LLVM's loop vectorizer emit as many runtime alias checks as a loop needs (module
+    doc)."""
+    llvm.set_option("", f"--runtime-memory-check-threshold={MEMORY_CHECKS}")
+    llvm.set_option("", f"--vectorize-memory-check-threshold={MEMORY_CHECKS}")
+
+
 distinct_function_ids()
+allow_memory_checks()
 _use_versioned_cache()
 
 

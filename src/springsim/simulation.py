@@ -127,14 +127,31 @@ class Simulation:
             self._substeps[dt] = collider_substeps(self.scene.terrains, dt)
         return self._substeps[dt]
 
-    def _advance(self, dt: float, count: int) -> None:
+    def keeps_stages(self) -> int:
+        """How many stage accelerations ``step_keeping`` keeps a step (0: it cannot)."""
+        keeps = (getattr(self.integrator, "keeps_stages", None)
+                 and self.integrator.keeps_stages(self.model) and self.substeps().count == 1)
+        return self.integrator.stages if keeps else 0
+
+    def step_keeping(self, kept: np.ndarray, starts: np.ndarray) -> None:
+        """len(kept) steps in one compiled call, as ``step``, that also keep each step's start
+        (x, v) in starts[n] (2, P, 3) and its force evaluations' accelerations in kept[n]
+        (keeps_stages(), P, 3): the gradient's tape (gradients/tape.py) records them so that its
+        adjoint need not evaluate the forces again."""
+        self._advance(self.dt, len(kept), (kept, starts))
+
+    def _advance(self, dt: float, count: int, tape: tuple | None = None) -> None:
         self.state.check(self.model.particle_count, self._surface_shapes(), self._lists_left)
         parts = self.substeps(dt).count
         step = dt / parts   # the step the integrator takes (dt itself without substeps)
         # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
         with signals.deferred():
-            done, particle = self.integrator.advance(self.model, self.state, step,
-                                                     count * parts, self.threads)
+            if tape is None:
+                done, particle = self.integrator.advance(self.model, self.state, step,
+                                                         count * parts, self.threads)
+            else:
+                done, particle = self.integrator.advance_keeping(self.model, self.state, step,
+                                                                 *tape)
             self._lists_left = (self.state.pairs, self.state.solve_pairs)
             self.state.time += done * step
             self.state.steps += done // parts

@@ -4,8 +4,9 @@ cotangents of the state before it, and the parameters' share added to ``bar``.
 An open set, as the integrators are: one class per method, registered under the integrator's
 name (``@register_adjoint``). Each mirrors its method's step (integrators/) line by line in
 reverse, so the gradient is of the arithmetic the simulation did, not of the differential
-equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar)`` takes the
-recorded states at the step's start and end, (x, v) each, and returns (x_bar, v_bar) at its
+equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar, kept)`` takes
+the recorded states at the step's start and end, (x, v) each, and what the tape kept of the step
+besides (its stages' accelerations, tape.py, or None), and returns (x_bar, v_bar) at its
 start, the step's start time in ``physical.clock`` (clock.py); each force evaluation sets its
 own time there first, as the forward's stages move the world. The explicit methods' terrain
 contact (still planes, spheres, bowls and meshes: contact.py) is in their force evaluations
@@ -14,6 +15,8 @@ in NumPy from the step's start to know what it did; the hard attachments are hel
 that pass (attachments.py), and the body-body contacts answered after it (body_contact.py), the
 same way.
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from ..errors import SceneError
@@ -49,7 +52,7 @@ class Adjoint:
         self.integrator = integrator
         self.model = model
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
         raise NotImplementedError   # every registered adjoint overrides this
 
 
@@ -57,7 +60,7 @@ class ExplicitAdjoint(Adjoint):
     """An explicit method: its update (``update``, with what each force evaluation's contact
     did), then the impact pass; the adjoint goes back through both."""
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
         at_time(physical, 0.0)
         x, v = place(physical, *start)
         x_new, v_new, stages = self.update(physical, h, x, v)
@@ -131,6 +134,30 @@ class ExplicitEulerAdjoint(ExplicitAdjoint):
         return x_bar, v_bar
 
 
+class Runs(NamedTuple):
+    """What RK4's step adjoint kernel (run_kernels.rk4_step_vjp) takes of the parameters, found
+    once for each Physical: the springs in runs and their entry table, the loose springs'
+    parameters, the particles' (inv_mass, drag, gravity), and whether the kernel can take the
+    steps at all (``plain``: no wind, soft pins or attachments, whose forces it leaves out)."""
+
+    physical: object
+    layout: object
+    table: np.ndarray
+    loose: tuple
+    particles: tuple
+    plain: bool
+
+    @classmethod
+    def of(cls, physical):
+        layout = run_layout(physical.a, physical.b)
+        loose = layout.loose
+        plain = not (blows(physical) or soft(physical).any() or len(physical.attachment_nodes))
+        return cls(physical, layout, entry_table(layout, physical.ks, physical.kd, physical.rest),
+                   (physical.a[loose], physical.b[loose], physical.ks[loose], physical.kd[loose],
+                    physical.rest[loose]),
+                   (physical.inv_mass, physical.drag, physical.gravity), plain)
+
+
 @register_adjoint
 class RK4Adjoint(ExplicitAdjoint):
     """integrators/rk4.py: stages (x_k, v_k), slopes (v_k, a(x_k, v_k)),
@@ -140,32 +167,27 @@ class RK4Adjoint(ExplicitAdjoint):
 
     name = "rk4"
     work = columns = None   # the kernel's work arrays, sized to the model
-    runs = None   # (physical, its RunLayout, entry table, loose springs' parameters)
+    runs = None   # Runs of the physical parameters last seen
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
-        if (blows(physical) or soft(physical).any() or len(physical.attachment_nodes)
-                or not far_from_terrains(physical, h, start, end)
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
+        if self.runs is None or self.runs.physical is not physical:
+            self.runs = Runs.of(physical)
+        if (not self.runs.plain or not far_from_terrains(physical, h, start, end)
                 or not far_from_bodies(physical, h, start, end)):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
+        if kept is None:   # the kernel evaluates the stages' forces again
+            kept = np.empty((0, len(start[0]), 3))
         at_time(physical, 0.0)
         x, v = place(physical, start[0], start[1])
         if self.work is None or self.work.shape[1] != len(x):
             self.work = np.empty((17, len(x), 3))
             self.columns = np.empty((ROWS, len(x)))
-        if self.runs is None or self.runs[0] is not physical:
-            layout = run_layout(physical.a, physical.b)
-            loose = layout.loose
-            self.runs = (physical, layout, entry_table(layout, physical.ks, physical.kd,
-                                                       physical.rest),
-                         (physical.a[loose], physical.b[loose], physical.ks[loose],
-                          physical.kd[loose], physical.rest[loose]))
-        _, layout, table, loose = self.runs
+        runs = self.runs
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
         release(physical, x_bar, v_bar)
-        rk4_step_vjp(layout, table, loose, (physical.inv_mass, physical.drag, physical.gravity),
-                     h, x, v, x_bar, v_bar,
+        rk4_step_vjp(runs.layout, runs.table, runs.loose, runs.particles, h, x, v, x_bar, v_bar,
                      (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), self.work,
-                     self.columns)
+                     self.columns, kept)
         release(physical, x_bar, v_bar)
         return x_bar, v_bar
 
@@ -226,7 +248,7 @@ class ImplicitEulerAdjoint(Adjoint):
     carried_bar = None   # the cotangent of the friction dampers carried into the step after
     solver = None        # solve.ForwardSolver, made on first use
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
         iterations = self.integrator.newton_iterations
         at_time(physical, 0.0)
         x, v = place(physical, start[0], start[1])

@@ -43,6 +43,8 @@ def targets(physical, t):
 
 def release(physical, x_bar, v_bar):
     """Zero the cotangents of the hard pins on paths (place_pins overwrote their state)."""
+    if not len(physical.pin_particles):   # most scenes: at every step, twice
+        return
     moving = physical.pin_particles[~soft(physical)]
     x_bar[moving] = 0.0
     v_bar[moving] = 0.0
@@ -51,6 +53,8 @@ def release(physical, x_bar, v_bar):
 def place(physical, x, v):
     """(x, v) with each hard pin on a path put on it at the force time (place_pins): the first
     state of a run may have them elsewhere (a start of its own), and step 0 moved them."""
+    if not len(physical.pin_particles):
+        return x, v
     hard = ~soft(physical)
     if not hard.any():
         return x, v

@@ -4,14 +4,15 @@ vector-Jacobian products (VJPs) use it too, with parameters per spring (a stiffn
 the springs of one run different constants) kept per entry of the runs.
 
 Entry e of a run holds spring ``entry_spring[e]``, or -1 at a hole, whose stiffness and damping
-are zero so that it adds nothing. The VJP of a run is three loops, each computing again from the
-positions what it needs: a single loop writing all nine results compiles to scalar code (the
-compiler cannot prove so many written arrays apart from the read ones), three loops of three
-results each to SIMD code, about twice as fast in all (benchmarks/gradients.py kernels). Springs
-in no run take kernels.py's loops. One thread, a fixed order: the same bits for any thread count.
+are zero so that it adds nothing. The VJP of a run is one loop writing nine results per spring,
+then the scatter to the springs' ends: it compiles to SIMD code only with the runtime alias
+checks that _jit.allow_memory_checks permits (without them, scalar code; three loops of three
+results each, which needed fewer checks, were a third slower: benchmarks/gradients.py kernels).
+Springs in no run take kernels.py's loops. One thread, a fixed order: the same bits for any
+thread count.
 
 The columns (``cols``, ROWS x P) hold, by rows: positions, velocities, the cotangent g on the
-forces, the springs' force, three blocks of scratch and the cotangents of x and v.
+forces, the springs' force, two blocks of scratch and the cotangents of x and v.
 """
 import math
 
@@ -21,8 +22,8 @@ from .._jit import inline_kernel, kernel
 from ..spring_runs import RunLayout
 from .kernels import add_spring_forces, add_spring_forces_vjp
 
-X, V, G, FORCE, PUSH, DAMP, SHARE, X_BAR, V_BAR = range(0, 27, 3)   # first rows of each block
-ROWS = 27
+X, V, G, FORCE, PUSH, DAMP, X_BAR, V_BAR = range(0, 24, 3)   # first rows of each block
+ROWS = 24
 KS, KD, REST, KS_BAR, KD_BAR, REST_BAR = range(6)                    # rows of the entry table
 
 
@@ -95,72 +96,40 @@ def add_to_ends(cols, target, source, a, b, count, sign):
 
 
 @inline_kernel
-def push_vjp(cols, a, b, count, ks, kd, rest):
-    """PUSH rows: g . d(force on a)/d x_a for springs (a + i, b + i) (kernels.add_spring_forces_vjp
-    has the formula)."""
+def add_run_vjp(cols, table, a, b, count, start):
+    """Add g . d(force)/d(x, v) of springs (a + i, b + i) to the cotangent rows, and
+    g . d(force)/d(ks, kd, rest) to the table's cotangent rows at entries start + i. With
+    d = x_a - x_b, L = |d|, l = d / L, w = v_a - v_b, g = g_a - g_b (kernels.add_spring_forces_vjp
+    has the derivation): PUSH = g . d(force on a)/d x_a, DAMP = kd (g . l) l, minus
+    g . d(force on a)/d v_a."""
     positions, velocities = ends(cols, X, a, b, count), ends(cols, V, a, b, count)
     cotangents = ends(cols, G, a, b, count)
+    ks, kd, rest = table_rows(table, start, count)
+    ks_bar, kd_bar = table[KS_BAR, start:start + count], table[KD_BAR, start:start + count]
+    rest_bar = table[REST_BAR, start:start + count]
     ex, ey, ez = rows(cols, PUSH, a, count)
+    qx, qy, qz = rows(cols, DAMP, a, count)
     for i in range(count):
         length, inverse, lx, ly, lz = direction(positions, i)
         wx, wy, wz = difference(velocities, i)
         gx, gy, gz = difference(cotangents, i)
         gl = gx * lx + gy * ly + gz * lz
         wl = wx * lx + wy * ly + wz * lz
-        ratio = (length - rest[i]) * inverse
+        stretch = length - rest[i]
+        ratio = stretch * inverse
         px, py, pz = gl * wx + wl * gx, gl * wy + wl * gy, gl * wz + wl * gz
         pl = px * lx + py * ly + pz * lz
         k, c = ks[i], kd[i]
         ex[i] = -k * (gl * lx + (gx - gl * lx) * ratio) - c * (px - pl * lx) * inverse
         ey[i] = -k * (gl * ly + (gy - gl * ly) * ratio) - c * (py - pl * ly) * inverse
         ez[i] = -k * (gl * lz + (gz - gl * lz) * ratio) - c * (pz - pl * lz) * inverse
-
-
-@inline_kernel
-def damp_vjp(cols, a, b, count, kd):
-    """DAMP rows: minus g . d(force on a)/d v_a, kd (g_s . l) l."""
-    positions, cotangents = ends(cols, X, a, b, count), ends(cols, G, a, b, count)
-    qx, qy, qz = rows(cols, DAMP, a, count)
-    for i in range(count):
-        _, _, lx, ly, lz = direction(positions, i)
-        gx, gy, gz = difference(cotangents, i)
-        damped = kd[i] * (gx * lx + gy * ly + gz * lz)
+        damped = c * gl
         qx[i], qy[i], qz[i] = damped * lx, damped * ly, damped * lz
-
-
-@inline_kernel
-def share_vjp(cols, a, b, count, ks, rest):
-    """SHARE rows: minus the cotangents of ks and kd, and that of the rest length."""
-    positions, velocities = ends(cols, X, a, b, count), ends(cols, V, a, b, count)
-    cotangents = ends(cols, G, a, b, count)
-    of_ks, of_kd, of_rest = rows(cols, SHARE, a, count)
-    for i in range(count):
-        length, _, lx, ly, lz = direction(positions, i)
-        wx, wy, wz = difference(velocities, i)
-        gx, gy, gz = difference(cotangents, i)
-        gl = gx * lx + gy * ly + gz * lz
-        of_ks[i] = (length - rest[i]) * gl
-        of_kd[i] = (wx * lx + wy * ly + wz * lz) * gl
-        of_rest[i] = ks[i] * gl
-
-
-@inline_kernel
-def add_run_vjp(cols, table, a, b, count, start):
-    """Add g . d(force)/d(x, v) of springs (a + i, b + i) to the cotangent rows, and
-    g . d(force)/d(ks, kd, rest) to the table's cotangent rows at entries start + i."""
-    ks, kd, rest = table_rows(table, start, count)
-    push_vjp(cols, a, b, count, ks, kd, rest)
-    damp_vjp(cols, a, b, count, kd)
-    share_vjp(cols, a, b, count, ks, rest)
+        ks_bar[i] -= stretch * gl
+        kd_bar[i] -= wl * gl
+        rest_bar[i] += k * gl
     add_to_ends(cols, X_BAR, PUSH, a, b, count, 1.0)
     add_to_ends(cols, V_BAR, DAMP, a, b, count, -1.0)
-    of_ks, of_kd, of_rest = rows(cols, SHARE, a, count)
-    ks_bar, kd_bar = table[KS_BAR, start:start + count], table[KD_BAR, start:start + count]
-    rest_bar = table[REST_BAR, start:start + count]
-    for i in range(count):
-        ks_bar[i] -= of_ks[i]
-        kd_bar[i] -= of_kd[i]
-        rest_bar[i] += of_rest[i]
 
 
 @inline_kernel
@@ -200,11 +169,12 @@ def table_rows(table, start, count):
 
 
 @inline_kernel
-def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, force, g, x_bar,
+def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, acc, g, x_bar,
                             v_bar, bars, cols):
     """Add g . d(stage_accelerations)/d(everything) (physics.accelerations_vjp): to x_bar,
     v_bar, the particles' cotangents in ``bars`` and the springs' in the table and
-    ``loose_bars``."""
+    ``loose_bars``. ``acc``: the stage's accelerations, w (force - drag v) + gravity, whose
+    derivative with respect to the mass is -w (acc - gravity)."""
     a, b, ks, kd, rest = loose
     inv_mass, drag, gravity = particles
     _, _, _, mass_bar, drag_bar, gravity_bar = bars
@@ -217,9 +187,9 @@ def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, for
         if w > 0.0:
             net = 0.0
             for c in range(3):
-                net += g[i, c] * (force[i, c] - drag[i] * v[i, c])
+                net += g[i, c] * (acc[i, c] - gravity[c])
                 gravity_bar[c] += g[i, c]
-            mass_bar[i] -= w * w * net
+            mass_bar[i] -= w * net
         gv = 0.0
         for c in range(3):
             gv += g[i, c] * v[i, c]
@@ -240,12 +210,15 @@ def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, for
 
 
 @kernel
-def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, work, cols):
+def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, work, cols,
+                 kept):
     """The adjoint of one RK4 step without contact (adjoints.RK4Adjoint): (x_bar, v_bar) at
     the step's start, in place of those at its end. ``layout`` (runs, entry_spring, loose
     spring numbers), ``table`` (entry_table), ``loose`` (a, b, ks, kd, rest) of the springs in no
     run, ``particles`` (inv_mass, drag, gravity), ``bars`` (ks, kd, rest, mass, drag, gravity)
-    the parameters' cotangents, added to; ``work`` 17 (P, 3) arrays; ``cols`` (ROWS, P)."""
+    the parameters' cotangents, added to; ``work`` 17 (P, 3) arrays; ``cols`` (ROWS, P);
+    ``kept`` the stages' accelerations as the forward computed them (4, P, 3: tape.py), or no
+    rows, and then they are evaluated again here."""
     runs, entry_spring, loose_springs = layout
     count = x.shape[0]
     xs, vs, fs, acc = work[0:4], work[4:8], work[8:12], work[12:16]
@@ -259,7 +232,13 @@ def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, w
                 for c in range(3):
                     xs[k][i, c] = x[i, c] + step * vs[k - 1][i, c]
                     vs[k][i, c] = v[i, c] + step * acc[k - 1][i, c]
-        stage_accelerations(runs, table, loose, particles, xs[k], vs[k], cols, fs[k], acc[k])
+        if kept.shape[0] == 4:
+            for i in range(count):
+                for c in range(3):
+                    acc[k][i, c] = kept[k, i, c]
+        else:
+            stage_accelerations(runs, table, loose, particles, xs[k], vs[k], cols, fs[k],
+                                acc[k])
     # backwards: stage k's slope (v_k, a_k) enters y' with weight; its state is
     # y + step (v_{k-1}, a_{k-1}), so what reaches (x_k, v_k) is carried to stage k-1
     loose_bars = (np.zeros(loose_springs.shape[0]), np.zeros(loose_springs.shape[0]),
@@ -276,7 +255,7 @@ def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, w
                 xk_bar[i, c] = 0.0
                 vk_bar[i, c] = weight * x_bar[i, c] + v_carry[i, c]
                 g[i, c] = weight * v_bar[i, c] + a_carry[i, c]
-        stage_accelerations_vjp(runs, table, loose, loose_bars, particles, xs[k], vs[k], fs[k],
+        stage_accelerations_vjp(runs, table, loose, loose_bars, particles, xs[k], vs[k], acc[k],
                                 g, xk_bar, vk_bar, bars, cols)
         step = h if k == 3 else h / 2
         for i in range(count):

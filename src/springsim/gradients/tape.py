@@ -1,14 +1,22 @@
 """The forward run the gradient is of, and the backward pass over it, with checkpoints.
 
-The forward run is the simulation's own (the compiled integrator, one step a call), so the loss
-is of exactly the motion ``springsim run`` computes. The backward pass needs each step's start
+The forward run is the simulation's own (the compiled integrator, one step a call, or a stretch
+of steps a call where the method keeps its stages, below), so the loss is of exactly the motion
+``springsim run`` computes. The backward pass needs each step's start
 and end states. When all of them fit in ``memory_limit`` bytes they are kept; otherwise the full
 state (contact memory and pair lists included: state.State.copy) is kept every ``stride`` steps,
 and each stretch between two kept states is run again, bit for bit, before its adjoint, so that
 at most one stretch of states is held at a time. ``Tape.stored_bytes`` says what was held.
+
+Where the method can (rk4 on a model that runs the serial kernel: Simulation.keeps_stages),
+the compiled steps themselves keep each step's start and its stages' accelerations, a stretch
+of steps (all of them, or ``stride``) a call, so that the adjoint takes the accelerations
+instead of evaluating the forces again (adjoints.RK4Adjoint), and the recording costs no call a
+step.
 """
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,12 +35,14 @@ class Tape:
     states: list          # [(x, v)] per step when stride == 1, else full State every stride steps
     times: np.ndarray     # (steps,) s, each step's start as the forward run had it
     stored_bytes: int = 0
+    kept: np.ndarray | None = None   # (steps, stages, P, 3): each step's stages' accelerations
 
 
-def plan_stride(steps: int, particles: int, memory_limit: int) -> int:
-    """1 when every (x, v) fits in memory_limit, else the stride that keeps about
-    sqrt(steps) checkpoints and a stretch of as many states, each within half the limit."""
-    per_state = particles * 6 * 8
+def plan_stride(steps: int, particles: int, memory_limit: int, stages: int = 0) -> int:
+    """1 when every (x, v) (and the ``stages`` accelerations of each step) fits in memory_limit,
+    else the stride that keeps about sqrt(steps) checkpoints and a stretch of as many states,
+    each within half the limit."""
+    per_state = particles * (6 + 3 * stages) * 8
     if (steps + 1) * per_state <= memory_limit:
         return 1
     stride = max(2, math.ceil(math.sqrt(steps)))
@@ -61,9 +71,12 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
     """Run ``steps`` steps; returns (the positions at frame_steps (F, P, 3), the Tape)."""
     particles = simulation.model.particle_count
     memory = keeps_memory(simulation)
-    stride = plan_stride(steps, particles, memory_limit)
+    stages = simulation.keeps_stages()
+    stride = plan_stride(steps, particles, memory_limit, stages)
     wanted = {int(s): k for k, s in enumerate(frame_steps)}
     frames = np.empty((len(frame_steps), particles, 3))
+    if stages:
+        return frames, record_keeping(simulation, steps, stride, stages, wanted, frames)
     states, stored = [], 0
     times = np.empty(steps)   # the forward's own clock: start + n h rounds otherwise
     for n in range(steps + 1):
@@ -83,18 +96,74 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
                         stored + (stride > 1) * stride * particles * 48)
 
 
+def record_keeping(simulation, steps, stride, stages, wanted, frames) -> Tape:
+    """record's run where the method keeps its stages: a stretch of ``stride`` steps a call,
+    each step's start and stages' accelerations kept by the compiled step itself; the frames
+    ``wanted`` (step: row of frames) filled in."""
+    particles = simulation.model.particle_count
+    states, times, stored = [], np.empty(steps), 0
+    kept = None
+    stretch = steps if stride == 1 else stride   # every step in one call, or checkpoints
+    for first in range(0, steps, stretch):
+        if stride > 1:
+            states.append(simulation.state.copy())
+            stored += particles * 48
+        run = keeping_run(simulation, min(stretch, steps - first), stages)
+        starts, kept = run.starts, run.kept
+        times[first:first + len(kept)] = run.times
+        for n in range(first, first + len(starts)):
+            if n in wanted:
+                frames[wanted[n]] = starts[n - first, 0]
+        if stride == 1:
+            states = [(start[0], start[1]) for start in starts]
+            stored += starts.nbytes + kept.nbytes
+    stretch_bytes = stride * particles * (48 + stages * 24)
+    return Tape(steps, stride, states, times, stored + (stride > 1) * stretch_bytes,
+                kept if stride == 1 else None)
+
+
+class KeepingRun(NamedTuple):
+    """``count`` steps run in one call, keeping each step's start and stages."""
+
+    starts: np.ndarray   # (count + 1, 2, P, 3): each step's (x, v) at its start, and the end
+    kept: np.ndarray     # (count, stages, P, 3): each step's stages' accelerations
+    times: np.ndarray    # (count,) s: each step's start, as the call's clock has it
+
+
+def keeping_run(simulation, count: int, stages: int) -> KeepingRun:
+    """Run ``count`` steps in one call (Simulation.step_keeping). The first start is the state
+    before the call, as a step a call would have recorded it (the call places the moving pins
+    on their paths first, the same for later steps as the step before left them)."""
+    state = simulation.state
+    particles = simulation.model.particle_count
+    starts = np.empty((count + 1, 2, particles, 3))
+    kept = np.empty((count, stages, particles, 3))
+    begin = state.time
+    first = state.positions.copy(), state.velocities.copy()
+    simulation.step_keeping(kept, starts[:count])
+    starts[0, 0], starts[0, 1] = first
+    starts[count, 0], starts[count, 1] = simulation.positions, simulation.velocities
+    # start_step's clock: the call's start plus n h
+    return KeepingRun(starts, kept, begin + np.arange(count) * simulation.dt)
+
+
 def stretch(simulation, tape: Tape, first: int):
     """The (x, v) of steps first .. first + stride (at most tape.steps), run again from the
-    checkpoint at ``first``: the same bits as the forward run (one step a call, as it was)."""
+    checkpoint at ``first``: the same bits as the forward run (calls as it made them), and each
+    step's stages' accelerations where the method keeps them (else None)."""
     simulation.state = tape.states[first // tape.stride].copy()
     last = min(first + tape.stride, tape.steps)
+    stages = simulation.keeps_stages()
+    if stages:
+        run = keeping_run(simulation, last - first, stages)
+        return [(start[0], start[1]) for start in run.starts], run.kept
     states = []
     memory = keeps_memory(simulation)
     for n in range(first, last + 1):
         states.append(snapshot(simulation.state, memory))
         if n < last:
             simulation.step(1)
-    return states
+    return states, None
 
 
 def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars, check=None):
@@ -109,18 +178,19 @@ def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars,
     x_bar, v_bar = np.zeros((particles, 3)), np.zeros((particles, 3))
     bar = Cotangents.zeros(physical)
     stride = tape.stride
-    states, first = (tape.states, 0) if stride == 1 else (None, None)
+    states, kept, first = (tape.states, tape.kept, 0) if stride == 1 else (None, None, None)
     for n in range(tape.steps, 0, -1):
         for g in inject.get(n, ()):
             x_bar += g
         if stride > 1 and (states is None or n - 1 < first):
             first = ((n - 1) // stride) * stride
-            states = stretch(simulation, tape, first)
+            states, kept = stretch(simulation, tape, first)
         start, end = states[n - 1 - first], states[n - first]
         physical.clock[STEP_START] = tape.times[n - 1]
         if check is not None:
             check(n - 1, start)
-        x_bar, v_bar = adjoint.step_vjp(physical, h, start, end, x_bar, v_bar, bar)
+        stages = None if kept is None else kept[n - 1 - first]
+        x_bar, v_bar = adjoint.step_vjp(physical, h, start, end, x_bar, v_bar, bar, stages)
     for g in inject.get(0, ()):
         x_bar += g
     return x_bar, v_bar, bar

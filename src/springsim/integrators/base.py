@@ -58,6 +58,26 @@ class KernelIntegrator(Integrator):
 
     kernel = None
     parallel_kernel = None
+    # ``keeping_kernel(model_arrays, x, v, dt, steps, pairs, kept, starts)``: ``kernel``,
+    # serial, that also keeps each step's start (x, v) in starts (steps, 2, P, 3) and its
+    # ``stages`` force evaluations' accelerations in kept (steps, stages, P, 3), for the
+    # gradient's adjoint to reuse (gradients/tape.py); None where a method has none
+    keeping_kernel = None
+    stages = 0
+
+    def keeps_stages(self, model) -> bool:
+        """Whether ``advance_keeping`` takes this model's steps as ``advance`` does: a method
+        with a keeping kernel, on a model that runs the serial kernel."""
+        return self.keeping_kernel is not None and partition_count(model.particle_count) == 1
+
+    def advance_keeping(self, model, state, dt, kept, starts):
+        """``advance`` (where ``keeps_stages``) of len(kept) steps, keeping each one's start
+        and stages' accelerations."""
+        model.arrays.clock[0] = state.time
+        done, particle, state.pairs = self.keeping_kernel(
+            model.arrays, state.positions, state.velocities, float(dt), len(kept), state.pairs,
+            kept, starts)
+        return int(done), int(particle)
 
     def advance(self, model, state, dt, steps, threads=1):
         kernel = self.kernel

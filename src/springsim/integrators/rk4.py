@@ -19,16 +19,21 @@ from ._steps import Motion, drive, threaded, threaded_drive
 @inline_kernel
 def rk4_step(model, state, scratch, h, pairs):
     x, v = state.x, state.v
-    x_k, v_k, a, dx, dv, columns = scratch
+    x_k, v_k, a, dx, dv, columns, tape = scratch
+    n = begin_keeping(tape, x, v)
     accelerations(model, x, v, h, a, columns)      # k1 = (v, a)
+    keep(tape, n, 0, a)
     first_stage(x, v, a, x_k, v_k, dx, dv, h / 2)
     move_world(model, step_time(model) + h / 2)    # moving terrains at the stages' times
     accelerations(model, x_k, v_k, h, a, columns)  # k2 = (v_k, a)
+    keep(tape, n, 1, a)
     middle_stage(x, v, a, x_k, v_k, dx, dv, h / 2)
     accelerations(model, x_k, v_k, h, a, columns)  # k3
+    keep(tape, n, 2, a)
     middle_stage(x, v, a, x_k, v_k, dx, dv, h)
     move_world(model, step_end(model, h))
     accelerations(model, x_k, v_k, h, a, columns)  # k4
+    keep(tape, n, 3, a)
     last_stage(x, v, a, v_k, dx, dv, h)
     return pairs   # the body-body pair list: the post-step pass's to use
 
@@ -59,6 +64,36 @@ def middle_stage(x, v, a, x_k, v_k, dx, dv, step):
             v_k[i, c] = v[i, c] + step * a[i, c]
 
 
+# Where the gradient's tape records a run (gradients/tape.py), each step keeps its start and its
+# stages' accelerations, so that the adjoint need not evaluate the forces again: ``tape`` is
+# (kept (N, 4, P, 3), starts (N, 2, P, 3), the number of steps kept so far (1,)), with no rows
+# in a plain run.
+
+@inline_kernel
+def begin_keeping(tape, x, v):
+    """starts[n] = (x, v) for this step n, which it returns (-1 in a plain run)."""
+    kept, starts, count = tape
+    if kept.shape[0] == 0:
+        return -1
+    n = count[0]
+    count[0] = n + 1
+    for i in range(x.shape[0]):
+        for c in range(3):
+            starts[n, 0, i, c] = x[i, c]
+            starts[n, 1, i, c] = v[i, c]
+    return n
+
+
+@inline_kernel
+def keep(tape, n, k, a):
+    """kept[n, k] = a, stage k's accelerations, where the run is kept (n >= 0)."""
+    if n >= 0:
+        kept = tape[0]
+        for i in range(a.shape[0]):
+            for c in range(3):
+                kept[n, k, i, c] = a[i, c]
+
+
 @inline_kernel
 def last_stage(x, v, a, v_k, dx, dv, h):
     """y += h/6 (k1 + 2 k2 + 2 k3 + k4), with k4 = (v_k, a)."""
@@ -69,10 +104,16 @@ def last_stage(x, v, a, v_k, dx, dv, h):
 
 
 @kernel
-def rk4_scratch(x):
-    """x_k, v_k, a, dx, dv and the force columns."""
+def rk4_scratch(x, tape):
+    """x_k, v_k, a, dx, dv, the force columns and the tape (``begin_keeping``)."""
     return (np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x),
-            np.empty_like(x), force_columns(x))
+            np.empty_like(x), force_columns(x), tape)
+
+
+@kernel
+def no_tape():
+    """The tape of a plain run: nothing kept."""
+    return np.empty((0, 4, 0, 3)), np.empty((0, 2, 0, 3)), np.zeros(1, np.int64)
 
 
 threaded_rk4_step = threaded(rk4_step)
@@ -80,13 +121,22 @@ threaded_rk4_step = threaded(rk4_step)
 
 @kernel
 def advance(model, x, v, h, steps, pairs):
-    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
+    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x, no_tape()), h, steps, pairs)
+
+
+@kernel
+def advance_keeping(model, x, v, h, steps, pairs, kept, starts):
+    """``advance`` that keeps each step's start (x, v) in starts[n] and its four stages'
+    accelerations in kept[n] (begin_keeping)."""
+    tape = (kept, starts, np.zeros(1, np.int64))
+    return drive(rk4_step, model, Motion(x, v), rk4_scratch(x, tape), h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, x, v, h, steps, pairs):
     """advance, its loops on threads (integrators.KernelIntegrator)."""
-    return threaded_drive(threaded_rk4_step, model, Motion(x, v), rk4_scratch(x), h, steps, pairs)
+    return threaded_drive(threaded_rk4_step, model, Motion(x, v),
+                          rk4_scratch(x, no_tape()), h, steps, pairs)
 
 
 @register
@@ -96,3 +146,5 @@ class RK4(KernelIntegrator):
     summary = "classical fourth-order Runge-Kutta"
     kernel = staticmethod(advance)
     parallel_kernel = staticmethod(parallel_advance)
+    keeping_kernel = staticmethod(advance_keeping)
+    stages = 4
