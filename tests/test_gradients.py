@@ -429,3 +429,28 @@ def test_a_run_keeping_its_stages_is_the_same_run():
     assert keeping.time == steps * 2e-3 and keeping.steps_taken == plain.steps_taken == steps
     x = keeping.positions
     assert np.min(x[:, 0] + x[:, 1]) / np.sqrt(2.0) < 0.011   # on the plane, within its band
+
+
+def test_the_far_test_bounds_what_it_stands_for():
+    """contact.reach (RK4's adjoint asks it at every step whether a step may skip contact): a
+    plane's compiled least distance is the least distance of a free particle (pinned ones left
+    out), a sphere's the same through its own distance, and the speed a bound on the fastest
+    particle's, at most sqrt(3) times it."""
+    from springsim.gradients.contact import reach
+    from springsim.gradients.terrain_shapes import Flat, Round
+
+    rng = np.random.default_rng(5)
+    x, v = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    offset = rng.uniform(0.0, 0.1, 50)
+    free = np.ones(50, bool)
+    free[np.argmin(x[:, 1])] = False   # the lowest particle is pinned: it does not count
+    plane = Flat(np.array([0.1, -0.2, 0.3]), np.array([0.6, 0.8, 0.0]))
+    sphere = Round(np.array([0.0, -3.0, 0.0]), 1.0, 1.0)
+    planes = type("Planes", (), {"offset": offset})()
+    physical = type("Physical", (), {"free": free, "planes": planes})()
+    found = reach(physical, [(0, plane), (1, sphere)], x, v)
+    for j, shape in enumerate((plane, sphere)):
+        assert found.nearest[j] == pytest.approx(shape.distance(x, offset)[free].min(),
+                                                 rel=1e-12)
+    fastest = np.linalg.norm(v, axis=1).max()
+    assert fastest <= found.speed <= np.sqrt(3.0) * fastest

@@ -228,7 +228,7 @@ def test_the_adjoint_takes_each_step_at_the_forward_runs_own_time(stride_memory)
     assert any(t != n * dt for n, t in enumerate(times))
 
     class Spy:
-        def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar):
+        def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
             seen.append(float(physical.clock[STEP_START]))
             return x_bar, v_bar
 

@@ -168,12 +168,16 @@ class RK4Adjoint(ExplicitAdjoint):
     name = "rk4"
     work = columns = None   # the kernel's work arrays, sized to the model
     runs = None   # Runs of the physical parameters last seen
+    reach = None   # contact.Reach of the last step's start (the next one back's end)
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
         if self.runs is None or self.runs.physical is not physical:
             self.runs = Runs.of(physical)
-        if (not self.runs.plain or not far_from_terrains(physical, h, start, end)
-                or not far_from_bodies(physical, h, start, end)):
+            self.reach = None
+        far = False
+        if self.runs.plain:   # the step's start is the step before's end: its Reach is kept
+            far, self.reach = far_from_terrains(physical, h, start, end, self.reach)
+        if not far or not far_from_bodies(physical, h, start, end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         if kept is None:   # the kernel evaluates the stages' forces again
             kept = np.empty((0, len(start[0]), 3))

@@ -27,11 +27,13 @@ point cache: u is its closest point's, interpolated from its corners, and du/dx 
 that point's weights change with the position (terrain_shapes.Deforming).
 Backward Euler's contact (implicit_contact.py) follows the still ones.
 """
+import math
 from typing import NamedTuple
 
 import numpy as np
 
 from .clock import at_time
+from .kernels import largest_component
 from .terrain_shapes import Deforming, Moving, shape_of, surface_velocity
 
 
@@ -75,31 +77,61 @@ def followed(planes: Planes):
     return [(t, shape) for t, shape in enumerate(planes.shapes) if shape is not None]
 
 
-def far_from_terrains(physical, h, start, end) -> bool:
-    """Whether no stage of a step can have touched a followed terrain: every free particle
-    starts and ends it farther from each (a moving one where it is then) than the band and twice
-    the distance its fastest particle and the terrain's surface there cover in a step (an
-    explicit step's stages stay within h |v| of its start, near enough). The adjoint then skips
-    contact (run_kernels.rk4_step_vjp)."""
+class Reach(NamedTuple):
+    """How near one state's free particles come to each followed terrain (m), at most how fast
+    they go (m/s: sqrt(3) times the largest velocity component, cheaper than the norms), and
+    the positions it is of. far_from_terrains looks at each state twice, as one
+    step's start and the step before's end: among still terrains the second look reuses it."""
+
+    positions: np.ndarray
+    nearest: np.ndarray
+    speed: float
+
+
+def reach(physical, shapes, x, v) -> Reach:
+    """The state (x, v)'s Reach to ``shapes`` [(t, shape)], each where physical's clock has it."""
+    free, offset = physical.free, physical.planes.offset
+    nearest = np.array([least_distance(shape, x, offset, free) for _, shape in shapes])
+    return Reach(x, nearest, math.sqrt(3.0) * largest_component(v))
+
+
+def least_distance(shape, x, offset, free) -> float:
+    """The least distance of a free particle to ``shape``: its own, quicker, where it has one."""
+    if hasattr(shape, "least_distance"):
+        return shape.least_distance(x, offset, free)
+    # np.where, not indexing by the mask: 3 times faster
+    return float(np.min(np.where(free, shape.distance(x, offset), np.inf), initial=np.inf))
+
+
+def far_from_terrains(physical, h, start, end, known: Reach | None = None):
+    """(far, the start's Reach): far when no stage of a step can have touched a followed
+    terrain: every free particle starts and ends it farther from each (a moving one where it is
+    then) than the band and twice the distance its fastest particle and the terrain's surface
+    there cover in a step (an explicit step's stages stay within h |v| of its start, near
+    enough). The adjoint then skips contact (run_kernels.rk4_step_vjp). ``known``: the Reach
+    of the step after's start, which is this step's end, where every followed terrain is
+    still."""
     planes = physical.planes
     shapes = followed(planes)
     if not shapes:
-        return True
+        return True, None
     (x, v), (x_end, v_end) = start[:2], end[:2]
-    # a bound on the fastest speed, sqrt(3) times the largest component: the norms cost 4 times
-    # as much, at every step of the adjoint
-    speed = np.sqrt(3.0) * max(np.abs(v).max(), np.abs(v_end).max())
-    for t, shape in shapes:
-        at_time(physical, 0.0)   # a moving terrain where it is at the step's start and end
-        near = shape.distance(x, planes.offset)
-        sweep = surface_velocity(shape, x)   # and as far again as its surface moves
-        sweep = 0.0 if sweep is None else float(np.sqrt(np.max(np.einsum("ij,ij->i", sweep,
-                                                                          sweep))))
-        at_time(physical, h)
-        near = np.minimum(near, shape.distance(x_end, planes.offset))
-        if np.any(physical.free & (near < planes.epsilon[t] + 2.0 * h * (speed + sweep))):
-            return False
-    return True
+    still = not any(hasattr(shape, "velocity") for _, shape in shapes)
+    at_time(physical, 0.0)   # a moving terrain where it is at the step's start and end
+    first = reach(physical, shapes, x, v)
+    sweeps = [surface_velocity(shape, x) for _, shape in shapes]
+    at_time(physical, h)
+    last = (known if still and known is not None and known.positions is x_end
+            else reach(physical, shapes, x_end, v_end))
+    speed = max(first.speed, last.speed)
+    for j, (t, shape) in enumerate(shapes):
+        sweep = sweeps[j]   # the terrain's surface moves as far again
+        sweep = 0.0 if sweep is None else float(np.sqrt(np.max(np.einsum(
+            "ij,ij->i", sweep, sweep)[physical.free], initial=0.0)))
+        reach_t = planes.epsilon[t] + 2.0 * h * (speed + sweep)
+        if min(first.nearest[j], last.nearest[j]) < reach_t:
+            return False, first
+    return True, first
 
 
 # --- the reaction and friction inside each force evaluation --------------------------------------

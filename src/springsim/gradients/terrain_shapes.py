@@ -23,6 +23,7 @@ from ..motion import POSE, pose_into
 from ..terrains import Bowl, MeshTerrain, Plane, Sphere
 from ..terrains.mesh import trilinear as mesh_trilinear
 from .clock import FORCE_TIME
+from .kernels import least_height
 
 
 class Flat(NamedTuple):
@@ -38,6 +39,11 @@ class Flat(NamedTuple):
 
     def normals(self, x):
         return np.broadcast_to(self.normal, x.shape)
+
+    def least_distance(self, x, offset, free):
+        """The least distance of a free particle, in one compiled pass (a bound for the
+        adjoint's far test, contact.reach, where distance's rounding does not matter)."""
+        return least_height(x, self.normal, offset, free) - float(self.point @ self.normal)
 
     def gradient(self, x):
         return self.normals(x)
