@@ -103,12 +103,12 @@ def record_keeping(simulation, steps, stride, stages, wanted, frames) -> Tape:
     particles = simulation.model.particle_count
     states, times, stored = [], np.empty(steps), 0
     kept = None
-    stretch = steps if stride == 1 else stride   # every step in one call, or checkpoints
-    for first in range(0, steps, stretch):
+    calls = steps if stride == 1 else stride   # every step in one call, or checkpoints
+    for first in range(0, steps, calls):
         if stride > 1:
             states.append(simulation.state.copy())
             stored += particles * 48
-        run = keeping_run(simulation, min(stretch, steps - first), stages)
+        run = keeping_run(simulation, min(calls, steps - first), stages)
         starts, kept = run.starts, run.kept
         times[first:first + len(kept)] = run.times
         for n in range(first, first + len(starts)):
