@@ -109,23 +109,6 @@ def test_moving_terrain_gradients_match_finite_differences(integrator, case):
     assert_gradients_match(scene_of, integrator, names)
 
 
-def test_a_deforming_terrain_is_refused_where_it_is_under_implicit_euler(tmp_path):
-    """A plate that a point cache lifts 1.5 m into the small cube within the run is refused
-    under implicit_euler, whose contact adjoint follows no deforming mesh yet: the check looks it
-    up where its animation has it (where the scene placed it, it stays clear)."""
-    from springsim.errors import SceneError
-    from springsim.gradients import gradient
-    from test_gradients import small_scene, weighted_squares
-
-    scene = small_scene()
-    scene.bodies[0].pinned = ()
-    scene.terrains = [deforming_terrain(tmp_path, *plate(), lambda t, p: p + [0.0, 10.0 * t, 0.0],
-                                        frames=4)]
-    with pytest.raises(SceneError, match="terrains.0 = 'MeshTerrain': is touched at step"):
-        gradient(scene, weighted_squares, ["gravity"], duration=0.2, integrator="implicit_euler",
-                 dt=0.01)
-
-
 def deforming_terrain(folder, vertices, triangles, path, frames=3, fps=10.0, **settings):
     """A mesh terrain whose point cache has the vertices at ``path(t, vertices)`` for each
     frame's time t."""
@@ -185,13 +168,38 @@ def ball_on_deforming_ridge(folder):
         folder, *tent(), twisting_ridge, friction=0.4, restitution=0.6)])
 
 
+def cube_thrown_onto_deforming_plate(folder):
+    """The small cube 15 cm above a plate that its point cache holds still, thrown down at
+    10 m/s: under implicit_euler at 10 ms a step its bottom reaches the plate from beyond the
+    grid's reach (4 cm), found by the forward's swept lookup (gradients/implicit_lookup.py)."""
+    cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.1, 0.65, 0.07),
+                velocity=(0.5, -10.0, 0.2), pinned=())
+    return Scene(bodies=[cube], drag=0.1, terrains=[deforming_terrain(
+        folder, *plate(), lambda t, p: p, friction=0.6, restitution=0.3)])
+
+
+def ball_thrown_onto_deforming_ridge(folder):
+    """A ball 9 cm above the rising tent's ridge thrown down at 10 m/s: under implicit_euler
+    it reaches the ridge (an edge, where the normal turns) from beyond the grid's reach (8 cm:
+    the ridge's fastest vertex moves that far between frames)."""
+    scene = ball_on_deforming_ridge(folder)
+    scene.bodies[0].balls[0].position = (0.05, 0.79, 0.1)
+    scene.bodies[0].balls[0].velocity = (0.3, -10.0, 0.2)
+    return scene
+
+
 DEFORMING = {"plate": (cube_on_deforming_plate, ["terrains.0.friction", "bodies.0.structural.ks",
                                                   "gravity", "bodies.0.velocity"]),
-             "ridge": (ball_on_deforming_ridge, BALL_KEYS)}
+             "ridge": (ball_on_deforming_ridge, BALL_KEYS),
+             "thrown": (cube_thrown_onto_deforming_plate, ["terrains.0.friction",
+                                                           "bodies.0.structural.ks", "gravity",
+                                                           "bodies.0.velocity",
+                                                           "terrains.0.restitution"]),
+             "thrown-ridge": (ball_thrown_onto_deforming_ridge, BALL_KEYS)}
 
 
 @pytest.mark.parametrize("case", list(DEFORMING))
-@pytest.mark.parametrize("integrator", EXPLICIT)
+@pytest.mark.parametrize("integrator", EXPLICIT + ["implicit_euler"])
 def test_deforming_terrain_gradients_match_finite_differences(integrator, case, tmp_path):
     """Contact with a mesh that a point cache deforms (gradients/terrain_shapes.Deforming): on
     a plate's faces, whose surface velocity varies across each triangle, and on a ridge's edge,
@@ -240,3 +248,25 @@ def test_the_adjoint_takes_each_step_at_the_forward_runs_own_time(stride_memory)
     backward(simulation, Spy(), physical, tape, np.array([steps]),
              np.zeros((1, simulation.model.particle_count, 3)))
     assert seen[::-1] == times
+
+
+@pytest.mark.parametrize("case, count, turning", [("thrown", 9, False),
+                                                   ("thrown-ridge", 1, True)])
+def test_a_swept_contact_takes_part_under_implicit_euler(tmp_path, monkeypatch, case, count,
+                                                         turning):
+    """The thrown cases' swept contacts reach the adjoint (implicit_lookup.swept_vjp): the
+    cube's bottom layer on the plate's faces, the ball on the ridge, where the normal turns."""
+    from springsim.gradients import gradient, implicit_contact
+    from test_gradients import weighted_squares
+
+    real, rows, turns = implicit_contact.swept_vjp, [], []
+
+    def spy(shape, at, *rest):
+        rows.append(len(at))
+        turns.append(bool(np.any(shape.curvature(at) != 0.0)))
+        return real(shape, at, *rest)
+
+    monkeypatch.setattr(implicit_contact, "swept_vjp", spy)
+    gradient(DEFORMING[case][0](tmp_path), weighted_squares, ["gravity"],
+             duration=0.1, integrator="implicit_euler", dt=0.01)
+    assert sum(rows) >= count and any(turns) == turning

@@ -19,7 +19,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import SceneError
 from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
 from .body_contact import check_replayed, far_from_bodies, respond, respond_vjp
@@ -28,7 +27,8 @@ from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
                               replay as bodies_replay, touches_bodies)
-from .implicit_contact import adjoint as contact_adjoint, replay, touches_terrains
+from .implicit_contact import adjoint as contact_adjoint, replay
+from .implicit_lookup import touches_terrains
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
 from .pins import aim, place, release, soft
@@ -262,10 +262,6 @@ class ImplicitEulerAdjoint(Adjoint):
         v = aim(physical, x, v, h)
         bodies = touches_bodies(physical, h, start, end)
         if len(start) == 3 and touches_terrains(physical, h, start, end):
-            if holds(physical):
-                raise SceneError("attachments", "hard", "hold bodies that touch a terrain "
-                                 "under implicit_euler, which gradients do not follow yet: "
-                                 "give the attachments a stiffness")
             kind, terrain, dampers = start[2]
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
             penalty = PenaltyStep(physical, h, x, v, iterations) if bodies else None
@@ -294,10 +290,6 @@ class ImplicitEulerAdjoint(Adjoint):
     def bodies_vjp(self, physical, h, x, v, end, x_bar, v_bar, bar):
         """A step with body-body contact (implicit_bodies.py): replayed with the forward's
         solver, checked against the recorded end, then differentiated."""
-        if holds(physical):
-            raise SceneError("attachments", "hard", "hold bodies that touch each other under "
-                             "implicit_euler, which gradients do not follow yet: give the "
-                             "attachments a stiffness")
         if self.solver is None:
             self.solver = ForwardSolver(self.model, self.integrator)
         x_out, v_out, replayed = bodies_replay(physical, self.integrator, self.solver, h, x, v)

@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..terrains.deforming_mesh import REACH
 from .clock import at_time
 from .kernels import largest_component
 from .terrain_shapes import Deforming, Moving, shape_of, surface_velocity
@@ -56,7 +57,8 @@ class Planes(NamedTuple):
             row = arrays.terrain_parameters[t]
             motion, deforming = arrays.terrain_motion[t], arrays.terrain_deforming[t]
             shape = (shape_of(terrain, row) if deforming < 0
-                     else Deforming(terrain.deforming_surface(), clock))
+                     else Deforming(terrain.deforming_surface(), clock,
+                                    float(arrays.terrain_data[deforming + REACH])))
             if shape is not None and motion >= 0 and deforming < 0:
                 shape = Moving(shape, int(motion), arrays.motion_info, arrays.motion_keys, clock)
             shapes.append(shape)

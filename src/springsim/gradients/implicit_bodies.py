@@ -52,6 +52,7 @@ from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights
                            dot4, far_from_bodies, point_geometry, segment_parameters,
                            gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
                            respond, respond_vjp, surface_params)
+from .attachments import hold, hold_vjp, holds
 from .pins import place, release
 from .solve import estimate, iteration_vjp, newton_rhs
 
@@ -85,6 +86,7 @@ class Replay(NamedTuple):
     x_end: np.ndarray       # (P, 3) x + h v after the friction: the post-step pass's input
     v_after: np.ndarray
     response: object        # body_contact.Response or None
+    held: object = None     # attachments.Held: the hard attachments held before the pass
 
 
 def touches_bodies(physical, h, start, end) -> bool:
@@ -126,9 +128,12 @@ def replay(physical, integrator, solver, h, x, v):
     v_end = v + dv
     v_after, friction, x_before = penalty_end(physical, penalty, h, x, v_end)
     x_end, v_after = place(physical, x + h * v_after, v_after)   # the post-step pass's start
-    x_out, v_out, response = respond(physical, x_end, v_after, x)
+    x_held, v_held, held = x_end, v_after, None
+    if holds(physical):   # the hard attachments, before the pass (_steps.collide)
+        x_held, v_held, held = hold(physical, x_end, v_after)
+    x_out, v_out, response = respond(physical, x_held, v_held, x)
     return x_out, v_out, Replay(penalty.iterations, x_before, v_end, friction, x_end, v_after,
-                                response)
+                                response, held)
 
 
 def is_ball(shape):
@@ -184,6 +189,8 @@ def adjoint(physical, h, x, v, replayed, x_bar, v_bar, bar, solver):
     start_bar = np.zeros_like(x)
     if replayed.response is not None:
         x_bar, v_bar, start_bar = respond_vjp(physical, replayed.response, x_bar, v_bar, bar)
+    if replayed.held is not None:
+        x_bar, v_bar = hold_vjp(physical, replayed.held, x_bar, v_bar, bar)
     release(physical, x_bar, v_bar)      # the pins on paths were placed before the pass
     out_x = start_bar + x_bar            # x' = x + h v_after
     v_after_bar = v_bar + h * x_bar

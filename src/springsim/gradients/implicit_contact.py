@@ -1,5 +1,5 @@
-"""Backward Euler's step with terrain contact (planes, spheres, bowls and meshes, still or moving
-rigidly), replayed in NumPy, and its adjoint.
+"""Backward Euler's step with terrain contact (planes, spheres, bowls and meshes, still, moving
+rigidly or deforming), replayed in NumPy, and its adjoint.
 
 The forward (integrators/implicit_euler.py with implicit/constraints.py) holds each contact's
 normal velocity at a floor and lets it slide along the surface against a friction damper c (N s/m)
@@ -33,9 +33,10 @@ had, their friction comes after the Newton iterations and the post-step pass aft
 the adjoint gives each solve's and each update's cotangents their share.
 
 Each contact's normal, distance and surface velocity s are its terrain's at the step's start
-positions, with a moving terrain where it is at the step's end (``look_up``); friction and the
-floor act on the velocity relative to s. On a curved terrain the normal turns with the
-position, and on a turning one s changes with it, so the adjoint also gathers the cotangents
+positions, with a moving or deforming terrain where it is at the step's end
+(implicit_lookup.py); friction and the floor act on the velocity relative to s. On a curved
+terrain the normal turns with the position, and on a turning or deforming one s changes with
+it, so the adjoint also gathers the cotangents
 of the normal (from the held components, the projection the solve keeps, the dampers, the
 impulses and slips the updates read, the restored approach speed) and of s, and carries them to
 the start through the terrain's curvature and s's derivative (``held_vjp``); where every
@@ -52,15 +53,17 @@ from scipy import sparse
 from ..errors import SceneError
 from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
-from .contact import add_curvature, along, followed, impacts, impacts_vjp
+from .contact import add_curvature, along, impacts, impacts_vjp
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
-from .attachments import attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp
+from .attachments import (attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp,
+                          hold, hold_vjp, holds)
 from .body_contact import respond, respond_vjp
 from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, penalty_end,
                               penalty_matrix, penalty_vjp)
 from .pins import pin_blocks, pin_blocks_vjp, place, release
-from .terrain_shapes import Deforming, Flat, Moving
+from .implicit_lookup import look_up, refuse_turning, swept, swept_vjp, unseen
+from .terrain_shapes import Flat
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
@@ -76,6 +79,8 @@ class Constraints(NamedTuple):
     floor: np.ndarray      # (P,) m/s
     floor_case: np.ndarray
     surface: np.ndarray    # (P, 3) m/s, the terrain's surface velocity (0 on a still one)
+    at: np.ndarray         # (P, 3) m, where the contact was looked up (implicit_lookup.Lookup)
+    ahead: np.ndarray      # (P,) s, how far along the particle's path: 0 where not swept
 
 
 def floor_of(phi, v_n, s_n, h, epsilon):
@@ -117,43 +122,27 @@ def held_vjp(constraints, lookups, x, v, bars: HeldBars, h, x_bar, v_bar):
     n_bar[index] += vel[:, None] * v[index] + slowed[:, None] * constraints.surface[index]
     s_bar[index] += slowed[:, None] * constraints.normal[index]
     v_bar[index] += vel[:, None] * constraints.normal[index]
+    phi_bar_all = np.zeros(len(x))
+    phi_bar_all[index] = phi_bar
+    swept = constraints.ahead > 0.0
     for lookup in lookups:
-        rows = np.nonzero((constraints.terrain == lookup.terrain) & s_bar.any(axis=1))[0]
+        ours = constraints.terrain == lookup.terrain
+        plain = ours & ~swept
+        rows = np.nonzero(plain & s_bar.any(axis=1))[0]
         if lookup.surface is not None and len(rows):
             x_bar[rows] += lookup.shape.velocity_vjp(x[rows], s_bar[rows])
-        mine = constraints.terrain[index] == lookup.terrain
-        rows = index[mine]
-        x_bar[rows] += phi_bar[mine, None] * lookup.shape.gradient(x[rows])
-        rows = np.nonzero((constraints.terrain == lookup.terrain) & n_bar.any(axis=1))[0]
+        rows = np.nonzero(plain & (phi_bar_all != 0.0))[0]
+        x_bar[rows] += phi_bar_all[rows, None] * lookup.shape.gradient(x[rows])
+        rows = np.nonzero(plain & n_bar.any(axis=1))[0]
         if len(rows):
             add_curvature(rows, lookup.shape.curvature(x[rows]), n_bar[rows], x_bar)
-
-
-class Lookup(NamedTuple):
-    """A still terrain as the step's start sees it: the forward looks every terrain up once,
-    at the start's positions (constraints.closest_terrain), whichever solve asks."""
-
-    terrain: int
-    shape: object         # terrain_shapes' shape
-    phi: np.ndarray       # (P,) m
-    normal: np.ndarray    # (P, 3)
-    surface: object       # (P, 3) m/s, the surface's velocity there, or None: it stands still
-
-
-def replayed_terrains(physical):
-    """(t, shape) of every terrain the replay follows: planes, spheres, bowls and meshes,
-    still or moving rigidly (deforming ones are refused where touched: checks.contact_check)."""
-    return [(t, shape) for t, shape in followed(physical.planes)
-            if not isinstance(shape, Deforming)]
-
-
-def look_up(physical, x):
-    """[Lookup] of every followed terrain at the positions x, where the force time has it (the
-    step's end: a moving terrain's pose then, as the forward's step moves the world first)."""
-    offset = physical.planes.offset
-    return [Lookup(t, shape, shape.distance(x, offset), np.asarray(shape.normals(x)),
-                   shape.velocity(x) if isinstance(shape, Moving) else None)
-            for t, shape in replayed_terrains(physical)]
+        rows = np.nonzero(ours & swept)[0]
+        if len(rows):   # along v: a solve's contacts are on faces, where u plays no part
+            at_bar, u_bar = swept_vjp(lookup.shape, constraints.at[rows],
+                                      constraints.ahead[rows], constraints.normal[rows],
+                                      v[rows], phi_bar_all[rows], n_bar[rows])
+            x_bar[rows] += at_bar
+            v_bar[rows] += u_bar
 
 
 def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups):
@@ -165,9 +154,11 @@ def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups
     terrain = np.full(count, -1)
     normal = np.zeros((count, 3))
     surface = np.zeros((count, 3))
+    at, ahead = x.copy(), np.zeros(count)
     phi_best, v_n_best = np.zeros(count), np.zeros(count)
     earliest = np.full(count, np.inf)
-    for t, _, phi, n, s in lookups:
+    for lookup in lookups:
+        t, phi, n = lookup.terrain, lookup.phi, lookup.normal
         v_n = along(v, n)
         reached = phi + h * v_n
         touching = ((phi < epsilons[t]) | (reached < epsilons[t])) & physical.free
@@ -175,31 +166,16 @@ def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups
         terrain[better], earliest[better] = t, reached[better]
         phi_best[better], v_n_best[better] = phi[better], v_n[better]
         normal[better] = n[better]
-        if s is not None:
-            surface[better] = s[better]
+        at[better], ahead[better] = lookup.at[better], lookup.ahead[better]
+        if lookup.surface is not None:
+            surface[better] = lookup.surface[better]
     contact = terrain >= 0
     kind[contact] = CONTACT
     epsilon = epsilons[np.maximum(terrain, 0)]
     floor, case = floor_of(phi_best, v_n_best, rowdot(surface, normal), h, epsilon)
     floor[~contact] = 0.0
     continues = contact & (previous_kind == CONTACT) & (previous_terrain == terrain)
-    return Constraints(kind, terrain, normal, floor, case, surface), continues
-
-
-def touches_terrains(physical, h, start, end) -> bool:
-    """Whether a step may have had terrain contacts: some free particle within a terrain's
-    reach at its start (find_constraints' test) or within its band at its end (a contact made
-    during the step ends on its floor, in the band). Otherwise the step is the plain one
-    (solve.py), which is quicker."""
-    planes = physical.planes
-    (x, v), x_end = start[:2], end[0]
-    for t, shape in replayed_terrains(physical):
-        phi = shape.distance(x, planes.offset)
-        reach = np.minimum(phi, phi + h * along(v, shape.normals(x)))
-        near = np.minimum(reach, shape.distance(x_end, planes.offset))
-        if np.any(physical.free & (near < planes.epsilon[t])):
-            return True
-    return False
+    return Constraints(kind, terrain, normal, floor, case, surface, at, ahead), continues
 
 
 def tangential(u, n):
@@ -266,6 +242,7 @@ class Replay(NamedTuple):
     end: tuple            # (x, v) before the impact pass, and v before the restoring
     bodies: object = None   # Bodies: the penalty contacts' part, when bodies touched too
     lookups: list = ()    # [Lookup] of the terrains at the step's start
+    held: object = None   # attachments.Held: the hard attachments held before the impacts
 
 
 def diagonal_blocks(physical, x_k, v_k, h):
@@ -316,15 +293,17 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     """The step as the forward took it (module doc), each solve exact; with ``penalty`` (an
     implicit_bodies.PenaltyStep) the bodies' penalty contacts in every solve, their friction
     after it and the post-step pass. Returns (x', v', the dampers it leaves, Replay)."""
-    lookups = look_up(physical, x)
+    lookups = look_up(physical, x, v, h)
     constraints, continues = find_constraints(physical, x, v, h, previous_kind, previous_terrain,
                                               lookups)
     kind = constraints.kind.copy()
     normal = constraints.normal.copy()
     terrain = constraints.terrain.copy()
     floor, floor_case = constraints.floor.copy(), constraints.floor_case.copy()
-    constraints = Constraints(kind, terrain, normal, floor, floor_case,
-                              constraints.surface.copy())   # grows in place
+    constraints = constraints._replace(   # grows in place
+        kind=kind, terrain=terrain, normal=normal, floor=floor, floor_case=floor_case,
+        surface=constraints.surface.copy(), at=constraints.at.copy(),
+        ahead=constraints.ahead.copy())
     c = np.where(continues, c_memory, 0.0)
     dv = np.zeros_like(x)
     record = []
@@ -364,7 +343,7 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
         steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, reaction), active()))
         for _ in range(MAX_CONTACT_UPDATES):
             solved_with = active()
-            update, c_new, grew = update_contacts(physical, h, v, constraints, kind, blocks,
+            update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind, blocks,
                                                   reaction, u0, c, ddv, lookups)
             steps.append(update._replace(active=solved_with))
             bodies_changed = penalty is not None and penalty.update(ddv)
@@ -402,12 +381,15 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     restored = contact[restore]
     v_end = v_k.copy()
     v_end[restored] += (approach[restore] - end_n[restore])[:, None] * n[restore]
-    x_out, v_out, found = impacts(physical, x_end, v_end)
+    x_out, v_out, held = x_end, v_end, None
+    if holds(physical):   # the pins on paths placed, the hard attachments held (_steps.collide)
+        x_out, v_out, held = hold(physical, *place(physical, x_end, v_end))
+    x_out, v_out, found = impacts(physical, x_out, v_out)
     if bodies is not None:   # the pins on paths placed, then the post-step pass
         x_out, v_out, response = respond(physical, *place(physical, x_out, v_out), x)
         bodies = bodies._replace(response=response)
     return x_out, v_out, c, Replay(constraints, continues, record, restored, found,
-                                   (x_end, v_end, v_k), bodies, lookups)
+                                   (x_end, v_end, v_k), bodies, lookups, held)
 
 
 def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
@@ -472,11 +454,15 @@ def tangents(n):
     return t1, np.cross(n, t1)
 
 
-def update_contacts(physical, h, v, constraints, kind, blocks, reaction, u0, c, ddv, lookups):
+def update_contacts(physical, h, x, v, constraints, kind, blocks, reaction, u0, c, ddv,
+                    lookups):
     """constraints.update_contacts: (Update, the dampers after it, whether a contact was
     added). ``kind`` and ``constraints`` grow in place as the forward's do."""
     epsilons = physical.planes.epsilon
     u = u0 + ddv
+    # a free particle the start's lookup does not see is asked along its path at u
+    lookups = [swept(physical, lookup, x, u, h, np.nonzero((kind == FREE) & unseen(lookup))[0])
+               for lookup in lookups]
     c_new = c.copy()
     index, cases, slips, impulses, stiffs, slides, released = [], [], [], [], [], [], []
     grown = []
@@ -499,6 +485,9 @@ def update_contacts(physical, h, v, constraints, kind, blocks, reaction, u0, c, 
                 constraints.terrain[i] = best.terrain
                 constraints.normal[i] = n
                 constraints.surface[i] = s
+                constraints.at[i], constraints.ahead[i] = best.at[i], best.ahead[i]
+                if best.ahead[i] > 0.0:
+                    refuse_turning(physical, best, i)
                 constraints.floor[i], constraints.floor_case[i] = floor[0], case[0]
                 c_new[i] = 0.0
                 grown.append(i)
@@ -549,6 +538,9 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
         release(physical, x_bar, v_bar)
         out_x += start_bar
     x_end_bar, v_end_bar = impacts_vjp(physical, record.impacts, x_bar.copy(), v_bar.copy(), bar)
+    if record.held is not None:
+        x_end_bar, v_end_bar = hold_vjp(physical, record.held, x_end_bar, v_end_bar, bar)
+        release(physical, x_end_bar, v_end_bar)
     curved = any(not isinstance(lookup.shape, Flat) for lookup in record.lookups)
     moving = any(lookup.surface is not None for lookup in record.lookups)
     held_bar = HeldBars(np.zeros(len(x)), np.zeros_like(x) if curved or moving else None,

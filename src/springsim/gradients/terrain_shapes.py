@@ -252,11 +252,16 @@ class Deforming:
     dn/dx = sign (I - n n^T)(I - D) / |x - p|, D the projector onto the closest feature: the
     face's plane (dn/dx = 0), an edge's line, or nothing at a corner. The surface moves at
     u = sum_k w_k u_k, its corners' velocities; du/dx = sum_k u_k (grad w_k)^T, the weights'
-    gradients within the feature."""
+    gradients within the feature.
 
-    def __init__(self, surface, clock):
+    The kernels' grid sees a point only within ``reach`` of the surface (centre distance,
+    terrains/deforming_mesh.py): backward Euler's lookup answers infinity beyond it (``seen``);
+    the explicit methods' contact never looks that far."""
+
+    def __init__(self, surface, clock, reach=np.inf):
         self.surface = surface
         self.clock = clock
+        self.reach = reach
         self.memo = {}   # the last time's surface and the last points' closest points
 
     def state(self):
@@ -277,22 +282,28 @@ class Deforming:
         if self.memo.get("points") != key:
             triangles = self.surface.triangles
             x = np.ascontiguousarray(x, float)
-            signed, row, _, _ = igl.signed_distance(
+            signed, row, _, pseudonormal = igl.signed_distance(
                 x, positions, triangles, sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)
             row = np.asarray(row, np.int64)
             weights, distance = closest_points_on(x, positions[triangles], row)
             corners = triangles[row]
             sign = np.where(signed < 0.0, -1.0, 1.0)
             d = x - np.einsum("kj,kjc->kc", weights, positions[corners])
-            safe = np.where(distance > 1e-12, distance, 1.0)
+            away = distance > 1e-12
+            # on the surface the direction is the closest feature's pseudonormal, as the kernel's
+            normal = np.where(away[:, None], sign[:, None] * d / np.where(away, distance, 1.0)[
+                :, None], pseudonormal / np.linalg.norm(pseudonormal, axis=1)[:, None])
             self.memo["points"] = key
-            self.memo["closest"] = Closest(corners, weights, sign, distance,
-                                           sign[:, None] * d / safe[:, None])
+            self.memo["closest"] = Closest(corners, weights, sign, distance, normal)
         return self.memo["closest"]
 
     def distance(self, x, offset):
         found = self.closest(x)
         return found.sign * found.distance - offset
+
+    def seen(self, x):
+        """(K,) whether the kernels' lookup finds the surface from each point."""
+        return self.closest(x).distance ** 2 < self.reach ** 2
 
     def normals(self, x):
         return self.closest(x).normal
