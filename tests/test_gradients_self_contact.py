@@ -3,16 +3,15 @@ implicit_euler gradients/implicit_bodies.py), against central finite differences
 forward run: a mesh cloth folded in two, its upper layer thrown down onto its lower one, which
 lies on a plane or is pinned (the same stencils as two bodies' contacts, of one self-colliding
 body: points against its own triangles and its own edges against each other, but never a pair
-that shares a surface edge). Under implicit_euler the upper layer lands on the pinned one (the
-solve's own pairs, and the Newton iteration solved again when a solve brings more into
-contact); a fold closing within a step that touches a terrain is refused there in one line; a
-self-colliding cloth that never touches itself has its gradient."""
+that shares a surface edge). Under implicit_euler the upper layer lands on the lower one,
+pinned or on the plane (the solve's own pairs, and the Newton iteration solved again when a
+solve brings more into contact); a self-colliding cloth that never touches itself has its
+gradient."""
 import numpy as np
 import pytest
 
 from springsim.bodies.cloth import Cloth
 from springsim.springs import SpringParameters
-from springsim.errors import SceneError
 from springsim.gradients import body_contact, gradient, implicit_bodies
 from springsim.scene import Scene
 from springsim.terrains.plane import Plane
@@ -70,10 +69,16 @@ def test_self_contact_gradients_match_finite_differences(sheet, integrator, lowe
     assert_gradients_match(lambda: folded(sheet, lower), integrator, KEYS)
 
 
-def test_implicit_euler_self_contact_matches_finite_differences(sheet, monkeypatch):
-    """The upper layer thrown at 0.8 m/s onto the pinned lower one at 1/100 s: the solve's own
-    pairs, those in contact at a step's start and those a solve brings into contact, after
-    which the iteration is solved again with them (implicit_bodies.PenaltyStep.regrow)."""
+@pytest.mark.parametrize("lower, speed", [("pins", 0.8), ("floor", 0.5)])
+def test_implicit_euler_self_contact_matches_finite_differences(sheet, monkeypatch, lower,
+                                                                 speed):
+    """The upper layer thrown onto the lower one at 1/100 s, the lower one pinned or on the
+    plane: the solve's own pairs, those in contact at a step's start and those a solve brings
+    into contact, after which the iteration is solved again with them
+    (implicit_bodies.PenaltyStep.regrow; on the plane the terrain replay's, where the
+    iteration solved again hands its friction dampers on). On the plane at 0.8 m/s the
+    forward's active sets change within 1e-7 of the values: no central difference is stable
+    there (steps of 1e-7 and 1e-8 differ by 2e-3 for drag)."""
     grew = []
     original = implicit_bodies.PenaltyStep.regrow
 
@@ -84,7 +89,7 @@ def test_implicit_euler_self_contact_matches_finite_differences(sheet, monkeypat
     monkeypatch.setattr(implicit_bodies.PenaltyStep, "regrow", spy)
 
     def scene():
-        return folded(sheet, "pins", 0.8)
+        return folded(sheet, lower, speed)
     _, grads = gradient(scene(), weighted_squares, KEYS, duration=10 * 0.01,
                         integrator="implicit_euler", dt=0.01, fps=25, **TIGHT["implicit_euler"])
     assert any(grew)
@@ -121,14 +126,6 @@ def test_the_fold_touches_itself_with_points_and_edges(sheet, monkeypatch):
     # every contact joins the two layers: a particle of one against a triangle or an edge
     # with a corner of the other (the fold's strip has corners in both)
     assert np.all(upper.any(axis=1) & ~upper.all(axis=1))
-
-
-def test_implicit_euler_refuses_a_fold_closing_on_a_terrain(sheet):
-    """Own pairs that a solve brings into contact in a step with terrain contact are not
-    followed yet (implicit_contact.replay)."""
-    with pytest.raises(SceneError, match="self_collision.*folds onto itself within a step"):
-        gradient(folded(sheet, "floor", 0.8), weighted_squares, ["gravity"],
-                 duration=10 * 0.01, integrator="implicit_euler", dt=0.01)
 
 
 def test_implicit_euler_follows_a_self_colliding_cloth_that_never_touches_itself():

@@ -7,10 +7,9 @@ soft (pins.py) and attachments, soft or hard (attachments.py); contact with plan
 bowls and meshes, still, moving rigidly or deforming (contact.py, implicit_contact.py); body-body
 contact of surfaces (a self-colliding body's own too) and of balls with balls and particles under
 every integrator (body_contact.py, implicit_bodies.py). Not yet covered under implicit_euler, so
-refused at that step rather than given a gradient that leaves a force out: hard attachments on
-bodies that touch a terrain or each other, a fold that closes within a step that touches a
-terrain (adjoints.py, implicit_contact.py) and a particle swept into a deforming mesh from
-beyond its reach (implicit_lookup.py). A terrain the adjoint does not
+refused at that step rather than given a gradient that leaves a force out: a contact that a
+solve's update sweeps onto a deforming mesh's edge or corner from beyond its reach
+(implicit_lookup.py). A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
 run (``contact_check``).
 """

@@ -30,7 +30,10 @@ cotangent from step to step (adjoints.ImplicitEulerAdjoint).
 Where bodies touch each other in the same step, their penalty contacts (implicit_bodies
 .PenaltyStep) are in every solve's matrix and right-hand side, with the active set each solve
 had, their friction comes after the Newton iterations and the post-step pass after the impacts;
-the adjoint gives each solve's and each update's cotangents their share.
+the adjoint gives each solve's and each update's cotangents their share. A Newton iteration in
+which a self-colliding body's fold closes is taken again from its dv with the grown own pairs,
+keeping the terrain contacts and dampers its first try left (as the forward does); the
+adjoint goes back through both tries, the first giving only its dampers' cotangent.
 
 Each contact's normal, distance and surface velocity s are its terrain's at the step's start
 positions, with a moving or deforming terrain where it is at the step's end
@@ -50,7 +53,6 @@ from typing import NamedTuple
 import numpy as np
 from scipy import sparse
 
-from ..errors import SceneError
 from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import add_curvature, along, impacts, impacts_vjp
@@ -222,6 +224,7 @@ class Iteration(NamedTuple):
     steps: list           # [Solve, Update, Solve, ..., (Update)] in order
     c_end: np.ndarray     # the dampers it leaves
     cap_active: object = None   # the penalty contacts active when the cap was taken
+    again: bool = False   # solved again (a fold closed within it): only its dampers carry on
 
 
 class Bodies(NamedTuple):
@@ -313,7 +316,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
     def active():
         return None if penalty is None else penalty.contacts.active.copy()
 
-    for k in range(iterations):
+    k = 0
+    while k < iterations:
         first = k == 0
         x_k, v_k = (x, v) if first else (x + h * (v + dv), v + dv)
         matrix = system_matrix(physical, x_k, v_k, h)
@@ -346,7 +350,8 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             update, c_new, grew = update_contacts(physical, h, x, v, constraints, kind, blocks,
                                                   reaction, u0, c, ddv, lookups)
             steps.append(update._replace(active=solved_with))
-            bodies_changed = penalty is not None and penalty.update(ddv)
+            bodies_changed = penalty is not None and penalty.update(
+                held_grown(constraints, update.grown, u0, ddv))
             moved = np.sum(np.abs(c_new[update.index] - c[update.index])
                            * np.maximum(update.slip, SLIP_SPEED))
             total = np.sum(physical.friction[terrain[update.index]] * update.impulse)
@@ -357,15 +362,16 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
             ddv, reaction = solve_step(physical, constraints, kind, *full(), u0, c)
             steps.append(Solve(kind.copy(), c.copy(), ddv, pushes(kind, normal, reaction),
                                active()))
-        if penalty is not None and penalty.regrow(dv, ddv):
-            raise SceneError("self_collision", True, "a body's surface folds onto itself within "
-                             "a step in which it touches a terrain under implicit_euler, which "
-                             "gradients do not follow yet: try a smaller dt, rk4 or "
-                             "symplectic_euler")
-        record.append(Iteration(dv, first, cap, c_start, steps, c.copy(), cap_active))
         if penalty is not None:
             penalty.keep(dv, first, ddv)
+        # a fold closing within the solve: the iteration again, from its dv, with the own
+        # pairs it brought into contact; the terrain contacts and dampers as it left them
+        again = penalty is not None and penalty.regrow(dv, ddv)
+        record.append(Iteration(dv, first, cap, c_start, steps, c.copy(), cap_active, again))
+        if again:
+            continue
         dv = dv + ddv
+        k += 1
     v_k = v + dv
     bodies = None
     if penalty is not None:   # the penalty contacts' friction, then x from v again
@@ -390,6 +396,18 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
         bodies = bodies._replace(response=response)
     return x_out, v_out, c, Replay(constraints, continues, record, restored, found,
                                    (x_end, v_end, v_k), bodies, lookups, held)
+
+
+def held_grown(constraints, grown, u0, ddv):
+    """ddv with the contacts an update made held at their floors, as the forward's update
+    leaves it for the penalty contacts' active-set pass that follows (a choice, not a value:
+    nothing to differentiate)."""
+    if not len(grown):
+        return ddv
+    n = constraints.normal[grown]
+    held = ddv.copy()
+    held[grown] += (constraints.floor[grown] - rowdot(u0[grown] + ddv[grown], n))[:, None] * n
+    return held
 
 
 def capped_dampers(physical, constraints, kind, blocks, b_sp, u0, c):
@@ -575,8 +593,11 @@ def adjoint(physical, h, x, v, record: Replay, x_bar, v_bar, c_bar, bar):
             bars = last if k == len(record.iterations) - 1 else contact_bars(
                 penalty.iterations[k].contacts)
             bodies_k = (penalty, k, bars)
-        dv_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar,
-                                          held_bar, out_x, out_v, bar, bodies_k)
+        # an iteration solved again left its dampers to the next, its ddv to none
+        ddv_bar = np.zeros_like(x) if it.again else dv_bar
+        start_bar, c_bar = iteration_adjoint(physical, h, x, v, constraints, it, ddv_bar, c_bar,
+                                             held_bar, out_x, out_v, bar, bodies_k)
+        dv_bar = dv_bar + start_bar if it.again else start_bar
         if bodies_k is not None:   # the contacts linearized about x + h (v + dv_k)
             estimate_bar = linearization_vjp(physical, penalty.iterations[k].contacts, x, v,
                                              it.dv, h, bodies_k[2], out_x, bar)
