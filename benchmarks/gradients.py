@@ -19,7 +19,8 @@ times the forward run (``Simulation.advance``) and then the gradient of the mean
 with respect to the structural ks (``springsim.gradient``: the forward run again, recording,
 and the backward pass), alternately, since the machine's speed drifts; it prints both and their
 ratio per repeat, and the range of the ratios. Both are warmed (compiled or loaded from the
-cache) by a short run first.
+cache) by a short run first, and one full gradient is timed before the repeats: the first in a
+process takes its tape's memory fresh from the system (page faults), which later ones reuse.
 
 ``kernels``: the cube's parts, each timed over 200 calls, 3 times: the forward rk4 step, the
 adjoint's spring force loop and its VJP one spring at a time (gradients/kernels.py), and one
@@ -68,6 +69,12 @@ def timed(case: str, duration: float, repeats: int) -> None:
     wrt = ["bodies.0.structural.ks"]
     springsim.Simulation(scene, **options).advance(5 * options["dt"])   # warm
     gradient(scene, mean_height, wrt, duration=5 * options["dt"], fps=30, **options)
+    # the first full gradient in a process takes its tape's memory fresh from the system,
+    # which a later one reuses: timed apart, not among the repeats
+    began = time.perf_counter()
+    gradient(scene, mean_height, wrt, duration=duration, fps=30, **options)
+    print(f"{case} {duration:g} s: the first gradient in this process "
+          f"{time.perf_counter() - began:.2f} s (fresh memory)", flush=True)
     ratios = []
     for repeat in range(repeats):
         simulation = springsim.Simulation(scene, **options)

@@ -168,47 +168,6 @@ def table_rows(table, start, count):
             table[REST, start:start + count])
 
 
-@inline_kernel
-def stage_accelerations_vjp(runs, table, loose, loose_bars, particles, x, v, acc, g, x_bar,
-                            v_bar, bars, cols):
-    """Add g . d(stage_accelerations)/d(everything) (physics.accelerations_vjp): to x_bar,
-    v_bar, the particles' cotangents in ``bars`` and the springs' in the table and
-    ``loose_bars``. ``acc``: the stage's accelerations, w (force - drag v) + gravity, whose
-    derivative with respect to the mass is -w (acc - gravity)."""
-    a, b, ks, kd, rest = loose
-    inv_mass, drag, gravity = particles
-    _, _, _, mass_bar, drag_bar, gravity_bar = bars
-    to_rows(cols, X, x)
-    to_rows(cols, V, v)
-    cols[X_BAR:V_BAR + 3] = 0.0
-    scaled_g = np.empty_like(g)   # the cotangent on the springs' force: w g
-    for i in range(x.shape[0]):
-        w = inv_mass[i]
-        if w > 0.0:
-            net = 0.0
-            for c in range(3):
-                net += g[i, c] * (acc[i, c] - gravity[c])
-                gravity_bar[c] += g[i, c]
-            mass_bar[i] -= w * net
-        gv = 0.0
-        for c in range(3):
-            gv += g[i, c] * v[i, c]
-            v_bar[i, c] -= w * drag[i] * g[i, c]
-            scaled_g[i, c] = w * g[i, c]
-        drag_bar[i] -= w * gv
-    to_rows(cols, G, scaled_g)
-    for r in range(runs.shape[0]):
-        first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
-        add_run_vjp(cols, table, first, first + offset, count, start)
-    for i in range(x.shape[0]):
-        for c in range(3):
-            x_bar[i, c] += cols[X_BAR + c, i]
-            v_bar[i, c] += cols[V_BAR + c, i]
-    loose_ks_bar, loose_kd_bar, loose_rest_bar = loose_bars
-    add_spring_forces_vjp(a, b, ks, kd, rest, x, v, scaled_g, x_bar, v_bar, loose_ks_bar,
-                          loose_kd_bar, loose_rest_bar)
-
-
 @kernel
 def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, work, cols,
                  kept):
@@ -220,53 +179,17 @@ def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, w
     ``kept`` the stages' accelerations as the forward computed them (4, P, 3: tape.py), or no
     rows, and then they are evaluated again here."""
     runs, entry_spring, loose_springs = layout
-    count = x.shape[0]
-    xs, vs, fs, acc = work[0:4], work[4:8], work[8:12], work[12:16]
-    # the stages, as rk4.py takes them
-    xs[0][:] = x
-    vs[0][:] = v
-    for k in range(4):
-        if k > 0:
-            step = h if k == 3 else h / 2
-            for i in range(count):
-                for c in range(3):
-                    xs[k][i, c] = x[i, c] + step * vs[k - 1][i, c]
-                    vs[k][i, c] = v[i, c] + step * acc[k - 1][i, c]
-        if kept.shape[0] == 4:
-            for i in range(count):
-                for c in range(3):
-                    acc[k][i, c] = kept[k, i, c]
-        else:
-            stage_accelerations(runs, table, loose, particles, xs[k], vs[k], cols, fs[k],
-                                acc[k])
-    # backwards: stage k's slope (v_k, a_k) enters y' with weight; its state is
-    # y + step (v_{k-1}, a_{k-1}), so what reaches (x_k, v_k) is carried to stage k-1
     loose_bars = (np.zeros(loose_springs.shape[0]), np.zeros(loose_springs.shape[0]),
                   np.zeros(loose_springs.shape[0]))
     table[KS_BAR:REST_BAR + 1] = 0.0
-    out_x, out_v = x_bar.copy(), v_bar.copy()
-    xk_bar, vk_bar = np.zeros((count, 3)), np.zeros((count, 3))
-    g = np.empty((count, 3))
-    v_carry, a_carry = np.zeros((count, 3)), np.zeros((count, 3))
-    for k in range(3, -1, -1):
-        weight = h / 6 if k == 0 or k == 3 else h / 3
-        for i in range(count):
-            for c in range(3):
-                xk_bar[i, c] = 0.0
-                vk_bar[i, c] = weight * x_bar[i, c] + v_carry[i, c]
-                g[i, c] = weight * v_bar[i, c] + a_carry[i, c]
-        stage_accelerations_vjp(runs, table, loose, loose_bars, particles, xs[k], vs[k], acc[k],
-                                g, xk_bar, vk_bar, bars, cols)
-        step = h if k == 3 else h / 2
-        for i in range(count):
-            for c in range(3):
-                out_x[i, c] += xk_bar[i, c]
-                out_v[i, c] += vk_bar[i, c]
-                v_carry[i, c] = step * xk_bar[i, c]
-                a_carry[i, c] = step * vk_bar[i, c]
-    # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
-    x_bar[:] = out_x
-    v_bar[:] = out_v
+    if kept.shape[0] == 4:
+        stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, kept, x_bar, v_bar, bars,
+                   work, cols)
+    else:
+        acc = work[12:16]
+        evaluate_stages(runs, table, loose, particles, h, x, v, work, cols, acc)
+        stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v_bar, bars,
+                   work, cols)
     ks_bar, kd_bar, rest_bar = bars[0], bars[1], bars[2]
     for e in range(entry_spring.shape[0]):
         s = entry_spring[e]
@@ -279,3 +202,87 @@ def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, w
         ks_bar[s] += loose_bars[0][j]
         kd_bar[s] += loose_bars[1][j]
         rest_bar[s] += loose_bars[2][j]
+
+
+@inline_kernel
+def evaluate_stages(runs, table, loose, particles, h, x, v, work, cols, acc):
+    """The stages' accelerations acc (4, P, 3), as rk4.py takes them."""
+    xs, vs, fs = work[0:4], work[4:8], work[8:12]
+    xs[0][:] = x
+    vs[0][:] = v
+    for k in range(4):
+        if k > 0:
+            step = h if k == 3 else h / 2
+            for i in range(x.shape[0]):
+                for c in range(3):
+                    xs[k][i, c] = x[i, c] + step * vs[k - 1][i, c]
+                    vs[k][i, c] = v[i, c] + step * acc[k - 1][i, c]
+        stage_accelerations(runs, table, loose, particles, xs[k], vs[k], cols, fs[k], acc[k])
+
+
+@inline_kernel
+def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v_bar, bars,
+               work, cols):
+    """The stages backwards (physics.accelerations_vjp at each): stage k's slope (v_k, a_k)
+    enters y' with ``weight``, and its state is y + step (v_{k-1}, a_{k-1}), so what reaches
+    (x_k, v_k) is carried to stage k-1. Each stage's state is written straight into the
+    columns' rows, from the kept accelerations, in the pass that also takes the particles'
+    terms (their mass, drag and gravity), and one pass after the springs adds what they gave
+    and carries it on. ``acc``: the stages' accelerations w (force - drag v) + gravity, whose
+    derivative with respect to the mass is -w (acc - gravity)."""
+    a, b, ks, kd, rest = loose
+    inv_mass, drag, gravity = particles
+    _, _, _, mass_bar, drag_bar, gravity_bar = bars
+    loose_ks_bar, loose_kd_bar, loose_rest_bar = loose_bars
+    has_loose = a.shape[0] > 0
+    xk, vk, gk, xk_bar, vk_bar = work[0], work[1], work[2], work[3], work[4]
+    v_carry, a_carry, out_x, out_v = work[5], work[6], work[7], work[8]
+    out_x[:] = x_bar
+    out_v[:] = v_bar
+    v_carry[:] = 0.0
+    a_carry[:] = 0.0
+    for k in range(3, -1, -1):
+        weight = h / 6 if k == 0 or k == 3 else h / 3
+        step = h if k == 3 else h / 2
+        for i in range(x.shape[0]):
+            w = inv_mass[i]
+            net = 0.0
+            gv = 0.0
+            for c in range(3):
+                if k == 0:
+                    position, velocity = x[i, c], v[i, c]
+                else:
+                    before = v[i, c] if k == 1 else v[i, c] + h / 2 * acc[k - 2][i, c]
+                    position = x[i, c] + step * before
+                    velocity = v[i, c] + step * acc[k - 1][i, c]
+                g = weight * v_bar[i, c] + a_carry[i, c]   # on the stage's acceleration
+                cols[X + c, i], cols[V + c, i], cols[G + c, i] = position, velocity, w * g
+                xk_bar[i, c] = 0.0
+                vk_bar[i, c] = weight * x_bar[i, c] + v_carry[i, c] - w * drag[i] * g
+                if has_loose:
+                    xk[i, c], vk[i, c], gk[i, c] = position, velocity, w * g
+                if w > 0.0:
+                    net += g * (acc[k][i, c] - gravity[c])
+                    gravity_bar[c] += g
+                gv += g * velocity
+            if w > 0.0:
+                mass_bar[i] -= w * net
+            drag_bar[i] -= w * gv
+        cols[X_BAR:V_BAR + 3] = 0.0
+        for r in range(runs.shape[0]):
+            first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
+            add_run_vjp(cols, table, first, first + offset, count, start)
+        if has_loose:
+            add_spring_forces_vjp(a, b, ks, kd, rest, xk, vk, gk, xk_bar, vk_bar, loose_ks_bar,
+                                  loose_kd_bar, loose_rest_bar)
+        # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
+        for i in range(x.shape[0]):
+            for c in range(3):
+                x_share = xk_bar[i, c] + cols[X_BAR + c, i]
+                v_share = vk_bar[i, c] + cols[V_BAR + c, i]
+                out_x[i, c] += x_share
+                out_v[i, c] += v_share
+                v_carry[i, c] = step * x_share
+                a_carry[i, c] = step * v_share
+    x_bar[:] = out_x
+    v_bar[:] = out_v
