@@ -454,3 +454,24 @@ def test_the_far_test_bounds_what_it_stands_for():
                                                  rel=1e-12)
     fastest = np.linalg.norm(v, axis=1).max()
     assert fastest <= found.speed <= np.sqrt(3.0) * fastest
+
+
+def test_the_far_test_of_a_whole_run_is_each_steps():
+    """contact.far_steps (every step of a kept run at once, as RK4's adjoint looks over a
+    stretch) says what far_from_terrains says step by step, over a run in which the default
+    cube falls onto the plane: far steps, then near ones."""
+    import springsim
+    from springsim.gradients.contact import far_from_terrains, far_steps
+    from springsim.gradients.physics import Physical
+    from springsim.gradients.tape import keeping_run
+
+    simulation = springsim.Simulation(springsim.load_scene("jelly-plane"), integrator="rk4",
+                                      dt=1e-3)
+    simulation.advance(1.0)   # falling: the far test lets go 0.255 s later
+    run = keeping_run(simulation, 300, 4)
+    physical = Physical.of(simulation.model)
+    h = simulation.dt
+    each = np.array([far_from_terrains(physical, h, run.starts[k], run.starts[k + 1])[0]
+                     for k in range(len(run.kept))])
+    assert each.any() and not each.all()
+    assert np.array_equal(far_steps(physical, h, run.starts), each)

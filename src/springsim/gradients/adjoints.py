@@ -22,7 +22,7 @@ import numpy as np
 from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
 from .body_contact import check_replayed, far_from_bodies, respond, respond_vjp
-from .contact import far_from_terrains, impacts, impacts_vjp
+from .contact import far_from_terrains, far_steps, impacts, impacts_vjp
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
 from .physics import step_accelerations, step_accelerations_vjp
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
@@ -170,13 +170,30 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # Runs of the physical parameters last seen
     reach = None   # contact.Reach of the last step's start (the next one back's end)
 
-    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
+    ahead = {}   # the far test of each step of the stretch being gone back over, by its start
+
+    def runs_of(self, physical) -> Runs:
         if self.runs is None or self.runs.physical is not physical:
             self.runs = Runs.of(physical)
             self.reach = None
+        return self.runs
+
+    def look_over(self, physical, h, states, starts):
+        """Take the far test of every step of a stretch at once where it can (``starts``: its
+        states as one array, from a keeping run; contact.far_steps)."""
+        far = None
+        if starts is not None and self.runs_of(physical).plain:
+            far = far_steps(physical, h, starts)
+        self.ahead = {} if far is None else {id(states[k][0]): bool(f) for k, f in
+                                             enumerate(far)}
+
+    def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
+        self.runs_of(physical)
         far = False
         if self.runs.plain:   # the step's start is the step before's end: its Reach is kept
-            far, self.reach = far_from_terrains(physical, h, start, end, self.reach)
+            far = self.ahead.get(id(start[0]))
+            if far is None:
+                far, self.reach = far_from_terrains(physical, h, start, end, self.reach)
         if not far or not far_from_bodies(physical, h, start, end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)
         if kept is None:   # the kernel evaluates the stages' forces again

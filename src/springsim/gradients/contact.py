@@ -35,7 +35,7 @@ import numpy as np
 from ..terrains.deforming_mesh import REACH
 from .clock import at_time
 from .kernels import largest_component
-from .terrain_shapes import Deforming, Moving, shape_of, surface_velocity
+from .terrain_shapes import Deforming, Flat, Moving, shape_of, surface_velocity
 
 
 class Planes(NamedTuple):
@@ -134,6 +134,26 @@ def far_from_terrains(physical, h, start, end, known: Reach | None = None):
         if min(first.nearest[j], last.nearest[j]) < reach_t:
             return False, first
     return True, first
+
+
+def far_steps(physical, h, starts):
+    """far_from_terrains for every step of a run of states at once, ``starts`` (S, 2, P, 3)
+    (tape.KeepingRun): (S - 1,) bool, or None where some followed terrain is not a still plane
+    (each step then takes far_from_terrains). NumPy over all the states is a few microseconds a
+    step against some fifty for a call a step."""
+    planes = physical.planes
+    shapes = followed(planes)
+    if not all(isinstance(shape, Flat) for _, shape in shapes):
+        return None
+    x, v = starts[:, 0], starts[:, 1]
+    speed = math.sqrt(3.0) * np.abs(v).max(axis=(1, 2), initial=0.0)
+    travel = 2.0 * h * np.maximum(speed[:-1], speed[1:])
+    far = np.ones(len(starts) - 1, bool)
+    for t, shape in shapes:
+        heights = np.where(physical.free, x @ shape.normal - planes.offset, np.inf)
+        nearest = heights.min(axis=1, initial=np.inf) - float(shape.point @ shape.normal)
+        far &= np.minimum(nearest[:-1], nearest[1:]) >= planes.epsilon[t] + travel
+    return far
 
 
 # --- the reaction and friction inside each force evaluation --------------------------------------

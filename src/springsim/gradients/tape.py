@@ -36,6 +36,7 @@ class Tape:
     times: np.ndarray     # (steps,) s, each step's start as the forward run had it
     stored_bytes: int = 0
     kept: np.ndarray | None = None   # (steps, stages, P, 3): each step's stages' accelerations
+    starts: np.ndarray | None = None   # (steps + 1, 2, P, 3): the states, where kept so
 
 
 def plan_stride(steps: int, particles: int, memory_limit: int, stages: int = 0) -> int:
@@ -119,7 +120,7 @@ def record_keeping(simulation, steps, stride, stages, wanted, frames) -> Tape:
             stored += starts.nbytes + kept.nbytes
     stretch_bytes = stride * particles * (48 + stages * 24)
     return Tape(steps, stride, states, times, stored + (stride > 1) * stretch_bytes,
-                kept if stride == 1 else None)
+                kept if stride == 1 else None, starts if stride == 1 else None)
 
 
 class KeepingRun(NamedTuple):
@@ -150,20 +151,21 @@ def keeping_run(simulation, count: int, stages: int) -> KeepingRun:
 def stretch(simulation, tape: Tape, first: int):
     """The (x, v) of steps first .. first + stride (at most tape.steps), run again from the
     checkpoint at ``first``: the same bits as the forward run (calls as it made them), and each
-    step's stages' accelerations where the method keeps them (else None)."""
+    step's stages' accelerations and the states as one array where the method keeps them (else
+    None, None)."""
     simulation.state = tape.states[first // tape.stride].copy()
     last = min(first + tape.stride, tape.steps)
     stages = simulation.keeps_stages()
     if stages:
         run = keeping_run(simulation, last - first, stages)
-        return [(start[0], start[1]) for start in run.starts], run.kept
+        return [(start[0], start[1]) for start in run.starts], run.kept, run.starts
     states = []
     memory = keeps_memory(simulation)
     for n in range(first, last + 1):
         states.append(snapshot(simulation.state, memory))
         if n < last:
             simulation.step(1)
-    return states, None
+    return states, None, None
 
 
 def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars, check=None):
@@ -178,13 +180,18 @@ def backward(simulation, adjoint, physical, tape: Tape, frame_steps, frame_bars,
     x_bar, v_bar = np.zeros((particles, 3)), np.zeros((particles, 3))
     bar = Cotangents.zeros(physical)
     stride = tape.stride
+    # an adjoint may look over a stretch's states at once (RK4Adjoint.look_over: its far test)
+    look = getattr(adjoint, "look_over", lambda *_: None)
     states, kept, first = (tape.states, tape.kept, 0) if stride == 1 else (None, None, None)
+    if stride == 1:
+        look(physical, h, states, tape.starts)
     for n in range(tape.steps, 0, -1):
         for g in inject.get(n, ()):
             x_bar += g
         if stride > 1 and (states is None or n - 1 < first):
             first = ((n - 1) // stride) * stride
-            states, kept = stretch(simulation, tape, first)
+            states, kept, starts = stretch(simulation, tape, first)
+            look(physical, h, states, starts)
         start, end = states[n - 1 - first], states[n - first]
         physical.clock[STEP_START] = tape.times[n - 1]
         if check is not None:
