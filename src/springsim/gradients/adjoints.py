@@ -22,9 +22,11 @@ import numpy as np
 from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
 from .body_contact import check_replayed, far_from_bodies, respond, respond_vjp
-from .contact import far_from_terrains, far_steps, impacts, impacts_vjp
+from .contact import (contact_accelerations, contact_accelerations_vjp, far_from_terrains,
+                      far_steps, impacts, impacts_vjp)
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
-from .physics import step_accelerations, step_accelerations_vjp
+from .physics import (accelerations, accelerations_vjp, step_accelerations,
+                      step_accelerations_vjp)
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
                               replay as bodies_replay, touches_bodies)
 from .implicit_contact import adjoint as contact_adjoint, replay
@@ -156,6 +158,68 @@ class Runs(NamedTuple):
                    (physical.a[loose], physical.b[loose], physical.ks[loose], physical.kd[loose],
                     physical.rest[loose]),
                    (physical.inv_mass, physical.drag, physical.gravity), plain)
+
+
+@register_adjoint
+class MidpointAdjoint(ExplicitAdjoint):
+    """integrators/midpoint.py: (x_m, v_m) = (x, v) + h/2 (v, a(x, v)), then
+    x' = x + h v_m, v' = v + h a(x_m, v_m), the second evaluation half way through the step."""
+
+    name = "midpoint"
+
+    def update(self, physical, h, x, v):
+        at_time(physical, 0.0)
+        a, first = step_accelerations(physical, x, v, h)
+        x_m, v_m = x + h / 2 * v, v + h / 2 * a
+        at_time(physical, h / 2)
+        a_m, second = step_accelerations(physical, x_m, v_m, h)
+        return x + h * v_m, v + h * a_m, (x_m, v_m, first, second)
+
+    def update_vjp(self, physical, h, x, v, stages, x_bar, v_bar, bar):
+        x_m, v_m, first, second = stages
+        out_x, out_v = x_bar.copy(), v_bar.copy()
+        xm_bar, vm_bar = np.zeros_like(x), h * x_bar
+        at_time(physical, h / 2)
+        step_accelerations_vjp(physical, x_m, v_m, h, second, h * v_bar, xm_bar, vm_bar, bar)
+        out_x += xm_bar
+        out_v += h / 2 * xm_bar + vm_bar
+        at_time(physical, 0.0)
+        step_accelerations_vjp(physical, x, v, h, first, h / 2 * vm_bar, out_x, out_v, bar)
+        return out_x, out_v
+
+
+@register_adjoint
+class PredictReevaluateAdjoint(ExplicitAdjoint):
+    """integrators/predict_reevaluate.py: (x_p, v_p) = (x, v) + h (v, a(x, v)), then
+    x' = x + h v_p, v' = v + h a_p, a_p the forces' at (x_p, v_p) at the step's end with the
+    terrains' contact stopping v, not v_p (that module says why)."""
+
+    name = "predict_reevaluate"
+
+    def update(self, physical, h, x, v):
+        at_time(physical, 0.0)
+        a, first = step_accelerations(physical, x, v, h)
+        x_p, v_p = x + h * v, v + h * a
+        at_time(physical, h)
+        a_p, second = accelerations(physical, x_p, v_p), []
+        if len(physical.friction):
+            a_p, second = contact_accelerations(physical, x_p, v, h, a_p)
+        return x + h * v_p, v + h * a_p, (x_p, v_p, first, second)
+
+    def update_vjp(self, physical, h, x, v, stages, x_bar, v_bar, bar):
+        x_p, v_p, first, second = stages
+        out_x, out_v = x_bar.copy(), v_bar.copy()
+        xp_bar, vp_bar = np.zeros_like(x), h * x_bar
+        a_bar = h * v_bar
+        at_time(physical, h)
+        if second:   # the contact read (x_p, v)
+            a_bar = contact_accelerations_vjp(physical, h, second, a_bar, xp_bar, out_v, bar)
+        accelerations_vjp(physical, x_p, v_p, a_bar, xp_bar, vp_bar, bar)
+        out_x += xp_bar
+        out_v += h * xp_bar + vp_bar
+        at_time(physical, 0.0)
+        step_accelerations_vjp(physical, x, v, h, first, h * vp_bar, out_x, out_v, bar)
+        return out_x, out_v
 
 
 @register_adjoint

@@ -1,7 +1,7 @@
 """What the adjoint covers, checked before the work (``check_supported``) and after the forward
 run (``check_contact_free``), each a one-line SceneError.
 
-Covered: symplectic_euler, explicit_euler, rk4 and implicit_euler (adjoints.py), springs,
+Covered: every integrator (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are
 soft (pins.py) and attachments, soft or hard (attachments.py); contact with planes, spheres,
 bowls and meshes, still, moving rigidly or deforming (contact.py, implicit_contact.py); body-body
