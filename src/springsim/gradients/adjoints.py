@@ -234,7 +234,8 @@ class RK4Adjoint(ExplicitAdjoint):
     runs = None   # Runs of the physical parameters last seen
     reach = None   # contact.Reach of the last step's start (the next one back's end)
 
-    ahead = {}   # the far test of each step of the stretch being gone back over, by its start
+    ahead = None   # {id(x): (x, far)}: the far test of each step of the stretch gone back
+                   # over, by its start's positions (kept alive with it, so no id is reused)
 
     def runs_of(self, physical) -> Runs:
         if self.runs is None or self.runs.physical is not physical:
@@ -248,15 +249,15 @@ class RK4Adjoint(ExplicitAdjoint):
         far = None
         if starts is not None and self.runs_of(physical).plain:
             far = far_steps(physical, h, starts)
-        self.ahead = {} if far is None else {id(states[k][0]): bool(f) for k, f in
-                                             enumerate(far)}
+        self.ahead = {} if far is None else {id(states[k][0]): (states[k][0], bool(f))
+                                             for k, f in enumerate(far)}
 
     def step_vjp(self, physical, h, start, end, x_bar, v_bar, bar, kept=None):
         self.runs_of(physical)
         far = False
         if self.runs.plain:   # the step's start is the step before's end: its Reach is kept
-            far = self.ahead.get(id(start[0]))
-            if far is None:
+            looked_at, far = (self.ahead or {}).get(id(start[0]), (None, None))
+            if looked_at is not start[0]:
                 far, self.reach = far_from_terrains(physical, h, start, end, self.reach)
         if not far or not far_from_bodies(physical, h, start, end):
             return super().step_vjp(physical, h, start, end, x_bar, v_bar, bar)

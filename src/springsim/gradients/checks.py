@@ -9,7 +9,8 @@ contact of surfaces (a self-colliding body's own too) and of balls with balls an
 every integrator (body_contact.py, implicit_bodies.py). Not yet covered under implicit_euler, so
 refused at that step rather than given a gradient that leaves a force out: a contact that a
 solve's update sweeps onto a deforming mesh's edge or corner from beyond its reach
-(implicit_lookup.py). A terrain the adjoint does not
+(implicit_lookup.py), and a particle let go and taken again within a step with another
+terrain, normal or floor (implicit_contact.py). A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
 run (``contact_check``).
 """

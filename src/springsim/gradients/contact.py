@@ -136,6 +136,9 @@ def far_from_terrains(physical, h, start, end, known: Reach | None = None):
     return True, first
 
 
+FAR_CHUNK = 64   # states far_steps takes at a time
+
+
 def far_steps(physical, h, starts):
     """far_from_terrains for every step of a run of states at once, ``starts`` (S, 2, P, 3)
     (tape.KeepingRun): (S - 1,) bool, or None where some followed terrain is not a still plane
@@ -146,12 +149,16 @@ def far_steps(physical, h, starts):
     if not all(isinstance(shape, Flat) for _, shape in shapes):
         return None
     x, v = starts[:, 0], starts[:, 1]
-    speed = math.sqrt(3.0) * np.abs(v).max(axis=(1, 2), initial=0.0)
+    # no temporary of the states' size: the tape holding them already fills its memory limit
+    speed = math.sqrt(3.0) * np.maximum(v.max(axis=(1, 2), initial=0.0),
+                                        -v.min(axis=(1, 2), initial=0.0))
     travel = 2.0 * h * np.maximum(speed[:-1], speed[1:])
     far = np.ones(len(starts) - 1, bool)
     for t, shape in shapes:
-        heights = np.where(physical.free, x @ shape.normal - planes.offset, np.inf)
-        nearest = heights.min(axis=1, initial=np.inf) - float(shape.point @ shape.normal)
+        nearest = np.concatenate([
+            np.where(physical.free, x[k:k + FAR_CHUNK] @ shape.normal - planes.offset,
+                     np.inf).min(axis=1, initial=np.inf) for k in range(0, len(x), FAR_CHUNK)])
+        nearest -= float(shape.point @ shape.normal)
         far &= np.minimum(nearest[:-1], nearest[1:]) >= planes.epsilon[t] + travel
     return far
 

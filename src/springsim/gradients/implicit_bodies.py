@@ -31,8 +31,8 @@ with them, as ``PenaltyStep.regrow`` does), and a ball's contacts with a particl
 triangle (at its closest point, or at its centre and corners where the ball is larger than it)
 or another ball, with the ball's friction after the solve (none between two balls). In a step
 in which particles also touch a terrain, the terrain replay (implicit_contact.py) takes the
-contacts beside its constraints through ``PenaltyStep``; an iteration solved again for grown
-own pairs there is refused in one line.
+contacts beside its constraints through ``PenaltyStep``, and takes an iteration again for grown
+own pairs as this replay does (implicit_contact.Iteration.again).
 """
 from typing import NamedTuple
 

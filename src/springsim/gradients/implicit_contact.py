@@ -53,6 +53,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import sparse
 
+from ..errors import SceneError
 from ..implicit.constraints import (CONTACT, FREE, FRICTION_SETTLED, PINNED, SLIP_SPEED)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import add_curvature, along, impacts, impacts_vjp
@@ -64,6 +65,7 @@ from .body_contact import respond, respond_vjp
 from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, penalty_end,
                               penalty_matrix, penalty_vjp)
 from .pins import pin_blocks, pin_blocks_vjp, place, release
+from .clock import STEP_START
 from .implicit_lookup import look_up, refuse_turning, swept, swept_vjp, unseen
 from .terrain_shapes import Flat
 from .wind import outer_weights, wind_blocks, wind_blocks_vjp
@@ -398,6 +400,21 @@ def replay(physical, h, x, v, c_memory, previous_kind, previous_terrain, iterati
                                    (x_end, v_end, v_k), bodies, lookups, held)
 
 
+def refuse_another_contact(physical, constraints, i, terrain, normal, floor):
+    """Refuse the step where particle i, a contact earlier in it and let go, is found again
+    with another terrain, normal or floor (a swept lookup along another velocity, or another
+    terrain first): the adjoint reads one contact per particle and step (its Constraints)."""
+    if constraints.terrain[i] < 0:
+        return
+    rounding = 1e-12 * max(1.0, abs(floor))   # the floor's v . n is summed in another order
+    if (constraints.terrain[i] != terrain or abs(constraints.floor[i] - floor) > rounding
+            or np.any(np.abs(constraints.normal[i] - normal) > 1e-12)):
+        raise SceneError(f"terrains.{terrain}", "contact", f"takes particle {i} again within "
+                         f"the step at {float(physical.clock[STEP_START]):.6g} s, where it was let go, "
+                         "with another normal or floor, which gradients do not follow under "
+                         "implicit_euler: try a smaller dt")
+
+
 def held_grown(constraints, grown, u0, ddv):
     """ddv with the contacts an update made held at their floors, as the forward's update
     leaves it for the penalty contacts' active-set pass that follows (a choice, not a value:
@@ -499,6 +516,7 @@ def update_contacts(physical, h, x, v, constraints, kind, blocks, reaction, u0, 
                 s = np.zeros(3) if best.surface is None else best.surface[i]
                 floor, case = floor_of(np.array([best.phi[i]]), np.array([v[i] @ n]),
                                        np.array([s @ n]), h, epsilons[best.terrain])
+                refuse_another_contact(physical, constraints, i, best.terrain, n, floor[0])
                 kind[i] = CONTACT
                 constraints.terrain[i] = best.terrain
                 constraints.normal[i] = n

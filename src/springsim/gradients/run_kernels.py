@@ -226,7 +226,7 @@ def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v
     """The stages backwards (physics.accelerations_vjp at each): stage k's slope (v_k, a_k)
     enters y' with ``weight``, and its state is y + step (v_{k-1}, a_{k-1}), so what reaches
     (x_k, v_k) is carried to stage k-1. Each stage's state is written straight into the
-    columns' rows, from the kept accelerations, in the pass that also takes the particles'
+    columns' rows, from the stages' accelerations, in the pass that also takes the particles'
     terms (their mass, drag and gravity), and one pass after the springs adds what they gave
     and carries it on. ``acc``: the stages' accelerations w (force - drag v) + gravity, whose
     derivative with respect to the mass is -w (acc - gravity)."""
@@ -275,7 +275,6 @@ def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v
         if has_loose:
             add_spring_forces_vjp(a, b, ks, kd, rest, xk, vk, gk, xk_bar, vk_bar, loose_ks_bar,
                                   loose_kd_bar, loose_rest_bar)
-        # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
         for i in range(x.shape[0]):
             for c in range(3):
                 x_share = xk_bar[i, c] + cols[X_BAR + c, i]
@@ -284,5 +283,6 @@ def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v
                 out_v[i, c] += v_share
                 v_carry[i, c] = step * x_share
                 a_carry[i, c] = step * v_share
+    # the loop added stage 1's own (x, v) cotangents; the carries out of it go nowhere
     x_bar[:] = out_x
     v_bar[:] = out_v

@@ -289,10 +289,7 @@ class Deforming:
             corners = triangles[row]
             sign = np.where(signed < 0.0, -1.0, 1.0)
             d = x - np.einsum("kj,kjc->kc", weights, positions[corners])
-            away = distance > 1e-12
-            # on the surface the direction is the closest feature's pseudonormal, as the kernel's
-            normal = np.where(away[:, None], sign[:, None] * d / np.where(away, distance, 1.0)[
-                :, None], pseudonormal / np.linalg.norm(pseudonormal, axis=1)[:, None])
+            normal = on_surface_normals(sign, d, distance, pseudonormal)
             self.memo["points"] = key
             self.memo["closest"] = Closest(corners, weights, sign, distance, normal)
         return self.memo["closest"]
@@ -332,6 +329,18 @@ class Deforming:
         positions, velocities = self.state()
         share = np.einsum("kjc,kc->kj", velocities[found.corners], u_bar)
         return np.einsum("kj,kjc->kc", share, weight_gradients(positions, found))
+
+
+def on_surface_normals(sign, d, distance, pseudonormal):
+    """sign d / |d|, d from the closest point; on the surface (|d| <= 1e-12) the closest
+    feature's pseudonormal, and straight up where that has no length, as the kernel's
+    (deforming_mesh.deformed_distance)."""
+    away = distance > 1e-12
+    size = np.linalg.norm(pseudonormal, axis=1)
+    on = np.where(size[:, None] > 0.0, pseudonormal / np.where(size > 0.0, size, 1.0)[:, None],
+                  np.array([0.0, 1.0, 0.0]))
+    return np.where(away[:, None], sign[:, None] * d / np.where(away, distance, 1.0)[:, None],
+                    on)
 
 
 def interpolate(surface, t):
