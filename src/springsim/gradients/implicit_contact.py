@@ -409,10 +409,11 @@ def refuse_another_contact(physical, constraints, i, terrain, normal, floor):
     rounding = 1e-12 * max(1.0, abs(floor))   # the floor's v . n is summed in another order
     if (constraints.terrain[i] != terrain or abs(constraints.floor[i] - floor) > rounding
             or np.any(np.abs(constraints.normal[i] - normal) > 1e-12)):
+        now = float(physical.clock[STEP_START])
         raise SceneError(f"terrains.{terrain}", "contact", f"takes particle {i} again within "
-                         f"the step at {float(physical.clock[STEP_START]):.6g} s, where it was let go, "
-                         "with another normal or floor, which gradients do not follow under "
-                         "implicit_euler: try a smaller dt")
+                         f"the step at {now:.6g} s, where it was let go, with another normal "
+                         "or floor, which gradients do not follow under implicit_euler: try a "
+                         "smaller dt")
 
 
 def held_grown(constraints, grown, u0, ddv):

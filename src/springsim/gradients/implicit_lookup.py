@@ -20,9 +20,7 @@ from ..errors import SceneError
 from ..implicit.constraints import MAX_SWEEP_POINTS
 from .clock import STEP_START
 from .contact import along, followed
-from .terrain_shapes import surface_velocity
-
-STRAIGHT_UP = np.array([0.0, 1.0, 0.0])   # the normal the forward gives an unseen point
+from .terrain_shapes import STRAIGHT_UP, surface_velocity
 
 
 class Lookup(NamedTuple):
@@ -38,11 +36,6 @@ class Lookup(NamedTuple):
     ahead: np.ndarray     # (P,) s, sigma: 0 where not swept
 
 
-def replayed_terrains(physical):
-    """(t, shape) of every terrain the replay follows: every terrain with a shape."""
-    return followed(physical.planes)
-
-
 def seen(shape, x) -> np.ndarray:
     """(K,) whether the forward's lookup finds the terrain from each point: everywhere, but for
     a deforming mesh beyond its reach."""
@@ -55,7 +48,7 @@ def look_up(physical, x, v, h):
     a free particle the lookup does not see asked along its path at v."""
     offset = physical.planes.offset
     lookups = []
-    for t, shape in replayed_terrains(physical):
+    for t, shape in followed(physical.planes):
         phi, normal = shape.distance(x, offset), np.array(shape.normals(x), float)
         surface = surface_velocity(shape, x)
         lookup = Lookup(t, shape, phi, normal, surface, x.copy(), np.zeros(len(x)))
@@ -71,6 +64,8 @@ def swept(physical, lookup: Lookup, x, u, h, rows) -> Lookup:
     """The lookup with each of ``rows`` (particles it does not see) asked along its path at u,
     as constraints.swept_lookup asks: points ``spacing`` (2 bands) apart up to the step's end,
     the first that sees the surface giving phi, n and the point; infinity if none."""
+    if not len(rows):   # asked at every solve's update, of every terrain
+        return lookup
     spacing = 2.0 * float(physical.planes.epsilon[lookup.terrain])
     phi, normal, at, ahead = (lookup.phi.copy(), lookup.normal.copy(), lookup.at.copy(),
                               lookup.ahead.copy())
@@ -127,7 +122,7 @@ def touches_terrains(physical, h, start, end) -> bool:
     planes = physical.planes
     (x, v), x_end = start[:2], end[0]
     travel = h * np.sqrt(np.einsum("ij,ij->i", v, v))
-    for t, shape in replayed_terrains(physical):
+    for t, shape in followed(physical.planes):
         phi = shape.distance(x, planes.offset)
         reach = np.minimum(phi, np.where(seen(shape, x), phi + h * along(v, shape.normals(x)),
                                          phi - travel))

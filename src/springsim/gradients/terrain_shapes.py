@@ -25,6 +25,8 @@ from ..terrains.mesh import trilinear as mesh_trilinear
 from .clock import FORCE_TIME
 from .kernels import least_height
 
+STRAIGHT_UP = np.array([0.0, 1.0, 0.0])   # the normal the kernels give a point they cannot place
+
 
 class Flat(NamedTuple):
     """A plane: phi = n . (x - p) - offset, the same normal everywhere."""
@@ -338,7 +340,7 @@ def on_surface_normals(sign, d, distance, pseudonormal):
     away = distance > 1e-12
     size = np.linalg.norm(pseudonormal, axis=1)
     on = np.where(size[:, None] > 0.0, pseudonormal / np.where(size > 0.0, size, 1.0)[:, None],
-                  np.array([0.0, 1.0, 0.0]))
+                  STRAIGHT_UP)
     return np.where(away[:, None], sign[:, None] * d / np.where(away, distance, 1.0)[:, None],
                     on)
 
