@@ -59,6 +59,17 @@ def point_cache(obj_path: str, cache_path: str, cache_format: str, frames: list,
     return result
 
 
+def obj_frames(paths: list) -> list:
+    """Each OBJ imported alone with Blender's default axes: its world-space vertices."""
+    result = []
+    for path in paths:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.obj_import(filepath=path)
+        (obj,) = bpy.context.selected_objects
+        result.append(evaluated_vertices(obj))
+    return result
+
+
 def main(argv) -> None:
     usd_path, obj_path, mdd_path, pc2_path, *frames = argv
     frames = [int(frame) for frame in frames]

@@ -161,13 +161,7 @@ def test_a_resumed_run_writes_the_npz_of_the_run_that_never_stopped(tmp_path, mo
                                                                     capsys):
     assert main([*RUN, "--out", str(tmp_path / "whole.npz")]) == 0
     stop_after = 12
-    original = checkpoint.write_checkpoint
-
-    def write_then_stop(path, simulation, recording, frame, *rest):
-        original(path, simulation, recording, frame, *rest)
-        if frame == stop_after:
-            raise KeyboardInterrupt   # as Ctrl+C between two frames
-    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    original = interrupted_after_frame(monkeypatch, stop_after)
     out = tmp_path / "part.npz"
     assert main([*RUN, "--out", str(out), "--checkpoint-every", "0"]) == 130
     assert not out.exists()
@@ -176,6 +170,23 @@ def test_a_resumed_run_writes_the_npz_of_the_run_that_never_stopped(tmp_path, mo
         assert int(data["frames_done"]) == stop_after + 1
     monkeypatch.setattr(checkpoint, "write_checkpoint", original)
     assert main(["run", "--resume", str(saved), "--quiet"]) == 0   # to the --out it was given
+    assert_same_recording(tmp_path / "whole.npz", out)
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("scene", ["cloth-sweep", "jelly-conveyor"])
+def test_a_resumed_run_of_a_moving_world_writes_the_npz_of_the_run_that_never_stopped(
+        tmp_path, monkeypatch, capsys, scene):
+    """Stopped at frame 12 (0.4 s: the sphere halfway through the curtain, the platform turning
+    under the cubes) and resumed from its checkpoint: the motions are functions of time, so
+    the recording is the uninterrupted one's, bit for bit."""
+    run = ["run", scene, "--duration", "1.0", "--fps", "30", "--quiet"]
+    assert main([*run, "--out", str(tmp_path / "whole.npz")]) == 0
+    original = interrupted_after_frame(monkeypatch, 12)
+    out = tmp_path / "part.npz"
+    assert main([*run, "--out", str(out), "--checkpoint-every", "0"]) == 130
+    monkeypatch.setattr(checkpoint, "write_checkpoint", original)
+    assert main(["run", "--resume", str(tmp_path / "part.checkpoint.npz"), "--quiet"]) == 0
     assert_same_recording(tmp_path / "whole.npz", out)
     capsys.readouterr()
 
@@ -213,11 +224,18 @@ def test_a_run_killed_after_a_checkpoint_resumes_to_the_same_npz(tmp_path):
 
 
 def interrupted_after_first_checkpoint(monkeypatch):
+    return interrupted_after_frame(monkeypatch, None)
+
+
+def interrupted_after_frame(monkeypatch, stop_after):
+    """Make a run stop, as at Ctrl+C, once it has written the checkpoint of frame
+    ``stop_after`` (None: the first); returns the writer to put back for a resume."""
     original = checkpoint.write_checkpoint
 
-    def write_then_stop(*arguments):
-        original(*arguments)
-        raise KeyboardInterrupt
+    def write_then_stop(path, simulation, recording, frame, *rest):
+        original(path, simulation, recording, frame, *rest)
+        if stop_after is None or frame == stop_after:
+            raise KeyboardInterrupt   # as Ctrl+C between two frames
     monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
     return original
 
@@ -264,13 +282,7 @@ def test_a_resumed_runs_wall_time_includes_the_time_before_it_stopped(tmp_path, 
     recording": the checkpoint kept the stepping time so far but not the wall time. The wall
     time (stepping and recording) is never less than the stepping time."""
     out = tmp_path / "x.npz"
-    original = checkpoint.write_checkpoint
-
-    def write_then_stop(path, simulation, recording, frame, *rest):
-        original(path, simulation, recording, frame, *rest)
-        if frame == 10:
-            raise KeyboardInterrupt
-    monkeypatch.setattr(checkpoint, "write_checkpoint", write_then_stop)
+    original = interrupted_after_frame(monkeypatch, 10)
     assert main([*RUN, "--duration", "0.5", "--out", str(out), "--checkpoint-every", "0"]) == 130
     with np.load(tmp_path / "x.checkpoint.npz") as data:
         before = float(data["recording.step_seconds"]), float(data["recording.wall_seconds"])

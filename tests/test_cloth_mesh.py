@@ -202,6 +202,36 @@ def test_material_masses_sum_to_density_times_area_and_springs_follow_the_geomet
         del columns
 
 
+def test_a_triangle_mesh_material_lumps_area_and_gives_each_edge_its_triangles_areas(tmp_path):
+    """On the strip of three triangles: each vertex weighs density times a third of its
+    triangles' areas; an edge's k is stretch times the areas of the triangles beside it over its
+    length squared, a bend spring's k is bend."""
+    material = ClothMaterial(density=0.5, stretch=600.0, shear=0.0, bend=30.0,
+                             stretch_damping=3.0, shear_damping=0.0, bend_damping=0.2)
+    path = strip_of_triangles(tmp_path)
+    cloth = Cloth(file=str(path), pinned="none", material=material)
+    built = cloth.build()
+    vertices = np.array([(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1), (2, 0, 0.5)], float)
+    triangles = [(0, 3, 2), (0, 2, 1), (1, 2, 4)]
+    area = {t: 0.5 * np.linalg.norm(np.cross(vertices[t[1]] - vertices[t[0]],
+                                             vertices[t[2]] - vertices[t[0]])) for t in triangles}
+    masses = np.zeros(5)
+    for t, a in area.items():
+        masses[list(t)] += 0.5 * a / 3
+    np.testing.assert_allclose(built.masses, masses, rtol=1e-12)
+    model = build_model(Scene(name="m", bodies=[cloth], terrains=[]))
+    ks = model.arrays.group_ks[model.arrays.spring_group]
+    kd = model.arrays.group_kd[model.arrays.spring_group]
+    for (a, b), kind, k, d in zip(model.springs, model.spring_kind, ks, kd):
+        if kind == SpringKind.BEND:
+            assert (k, d) == pytest.approx((30.0, 0.2), rel=1e-12)
+            continue
+        beside = sum(area[t] for t in triangles if a in t and b in t)
+        length = np.linalg.norm(vertices[a] - vertices[b])
+        assert (k, d) == pytest.approx((600.0 * beside / length ** 2, 3.0 * beside / length ** 2),
+                                       rel=1e-12)
+
+
 @pytest.mark.parametrize("content, words", [
     ("", "holds no vertices"),
     ("v 0 0 0\nv 1 0 0\nv nan 0 1\nf 1 2 3\n", "not finite"),

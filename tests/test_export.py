@@ -11,6 +11,7 @@ temporary one.
 """
 import os
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -253,7 +254,49 @@ def test_a_failed_write_leaves_the_old_files_and_no_temporary_one(recorded, tmp_
 
 
 def test_every_extension_has_a_writer():
-    assert set(extensions()) == {".usd", ".usda", ".usdc", ".mdd", ".pc2", ".obj"}
+    assert set(extensions()) == {".usd", ".usda", ".usdc", ".mdd", ".pc2", ".obj", "#.obj"}
+
+
+def test_an_obj_sequence_is_the_point_cache_frame_by_frame(recorded, tmp_path, capsys):
+    """take_###.obj: a file a frame, numbered from --start-frame and padded to the #s, each the
+    rest OBJ's faces with that frame's points of the PC2 (the same vertices, in its order)."""
+    path = recorded[2]
+    frames = recorded[1].frame_count
+    assert main(["export", str(path), str(tmp_path / "take.pc2"),
+                 str(tmp_path / "seq" / ".." / "take_###.obj"), "--start-frame", "7"]) == 0
+    assert f"take_007.obj to {tmp_path}/seq/../take_{6 + frames:03d}.obj ({frames} files)" in \
+        capsys.readouterr().out
+    data = (tmp_path / "take.pc2").read_bytes()
+    count = struct.unpack("<12siiffi", data[:32])[2]
+    cache = np.frombuffer(data[32:], "<f4").reshape(frames, count, 3)
+    rest_faces = _obj_faces(tmp_path / "take.obj")
+    names = sorted(name for name in os.listdir(tmp_path) if name.startswith("take_"))
+    assert names == [f"take_{7 + k:03d}.obj" for k in range(frames)]
+    for k, name in enumerate(names):
+        np.testing.assert_allclose(_obj_vertices(tmp_path / name), cache[k], atol=1e-6)
+        np.testing.assert_array_equal(_obj_faces(tmp_path / name), rest_faces)
+
+
+def test_an_obj_sequence_is_written_whole_or_not_at_all(recorded, tmp_path, monkeypatch):
+    from springsim.export import obj_sequence
+
+    take, calls = load_take(recorded[2]), []
+
+    def failing(path, *args):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OSError("disk full")
+        Path(path).write_text("v 0 0 0\n")
+
+    monkeypatch.setattr(obj_sequence, "write_obj", failing)
+    with pytest.raises(OSError):
+        export(take, tmp_path / "frame_####.obj")
+    assert os.listdir(tmp_path) == []
+
+
+def _obj_faces(path) -> np.ndarray:
+    lines = [line.split() for line in path.read_text().splitlines()]
+    return np.array([[int(c) for c in line[1:]] for line in lines if line and line[0] == "f"])
 
 
 def _obj_vertices(path) -> np.ndarray:

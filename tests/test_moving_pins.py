@@ -74,6 +74,21 @@ def test_a_soft_pin_holds_with_its_stiffness(integrator):
     assert sim.positions[:, 1] == pytest.approx(-0.1 * 9.8 / 100.0, rel=1e-4)
 
 
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
+def test_a_soft_pin_following_a_still_terrain_holds_with_its_stiffness(integrator):
+    """As a soft pin without motion: following a terrain that stands still is holding."""
+    cloth = Cloth(particles_per_edge=2, width=1.0, height=1.0,
+                  bend=SpringParameters(0.0, 0.0), pinned="none", particle_mass=0.1,
+                  pins=[Pin(particles=[0, 1, 2, 3], stiffness=100.0, damping=2.0,
+                            follow="terrains.0")])
+    scene = Scene(bodies=[cloth], terrains=[Sphere(center=(0.0, -5.0, 0.0), radius=1.0)],
+                  integrator=integrator, dt=STEPS[integrator])
+    scene.validate()
+    sim = springsim.Simulation(scene, integrator=integrator, dt=STEPS[integrator])
+    sim.advance(3.0)
+    assert sim.positions[:, 1] == pytest.approx(-0.1 * 9.8 / 100.0, rel=1e-4)
+
+
 def test_pins_on_a_cube_carry_it():
     cube = Cube(particles_per_edge=3, edge_length=1.0, position=(0.0, 1.0, 0.0),
                 pins=[Pin(region=Region(min=(-1, 1.4, -1), max=(1, 1.6, 1)),

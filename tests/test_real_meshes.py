@@ -87,6 +87,29 @@ def test_every_file_vertex_rides_inside_a_full_cell(name, unusual):
     np.testing.assert_allclose(np.einsum("vk,vkc->vc", weights, corners), vertices, atol=1e-12)
 
 
+@pytest.mark.parametrize("name", ["uv_sphere_unwelded.obj", "animal.obj"])
+def test_the_surface_cells_hold_every_point_of_every_triangle(name):
+    """The conservative voxelization (lattice_fill.surface_cells) keeps every cell whose inside
+    a triangle passes through: points sampled on each triangle (its corners, edges and inside,
+    barycentric steps of 1/16) fall only in kept cells, at a spacing of a tenth of the size.
+    A point on a face between cells (within TOUCH of it) is in the inside of neither."""
+    from springsim.bodies.lattice_fill import TOUCH, grid_for, surface_cells
+
+    mesh = trimesh.load(DATA / name, force="mesh", process=False)
+    welded = weld(np.asarray(mesh.vertices))
+    vertices, triangles = welded[0], welded[1][np.asarray(mesh.faces)]
+    grid = grid_for(vertices, 0.1 * float(np.ptp(vertices, axis=0).max()))
+    kept = surface_cells(vertices, triangles, grid)
+    steps = np.array([(i, j, 16 - i - j) for i in range(17) for j in range(17 - i)]) / 16
+    points = np.einsum("sk,tkc->tsc", steps, vertices[triangles]).reshape(-1, 3)
+    local = (points - grid.origin) / grid.spacing
+    inside = np.all(np.abs(local - np.round(local)) > 2 * TOUCH, axis=1)
+    assert inside.mean() > 0.9
+    cell = np.floor(local[inside]).astype(np.int64)
+    assert kept[tuple(cell.T)].all()
+    assert kept.sum() < kept.size     # and it is a surface, not the whole box
+
+
 def test_the_open_scan_fills_as_the_closed_pebble_apart_from_its_hole(tmp_path):
     """The scan is the pebble (tests/data's maker: an ellipsoid) without its underside: its
     lattice keeps nearly all of the closed pebble's particles."""

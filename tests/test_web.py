@@ -98,6 +98,43 @@ def test_the_pins_and_the_wind_are_recorded_and_drawn_where_they_are(tmp_path):
         replay.stop()
 
 
+def test_a_moving_terrain_is_drawn_where_its_motion_has_it_at_the_frames_time(tmp_path):
+    """A sphere that slides at 1 m/s and turns under a falling cloth: at each frame shown the
+    browser's terrain mesh is the sphere's mesh carried by its motion to the frame's time (its
+    centre is the motion's), and a still plane stays where it is."""
+    from springsim import Simulation
+    from springsim.bodies.cloth import Cloth
+    from springsim.export.geometry import terrain_meshes
+    from springsim.motion import Motion
+    from springsim.recording import record, write_npz
+    from springsim.replay.web import WebReplay
+    from springsim.scene import Scene
+    from springsim.terrains import Plane, Sphere
+
+    ball = Sphere(center=(0.0, 0.5, 0.0), radius=0.3,
+                  motion=Motion(velocity=(1.0, 0.0, 0.0), angular_velocity=(0.0, 2.0, 0.0)))
+    scene = Scene(bodies=[Cloth(particles_per_edge=4, width=1.0, height=1.0, pinned="none",
+                                position=(0.0, 1.2, 0.0))],
+                  terrains=[Plane(point=(0.0, -1.0, 0.0)), ball], integrator="implicit_euler",
+                  dt=1 / 60)
+    write_npz(tmp_path / "take.npz", record(Simulation(scene), 0.5, 10.0).arrays())
+    take = load_take(tmp_path / "take.npz")
+    plane, sphere = terrain_meshes(take.layout, take.positions)
+    replay = WebReplay(take, port=free_port())
+    try:
+        meshes = [handle for toggle, handle, _ in replay._parts if toggle == "terrains"]
+        for frame in (3, 0, take.frame_count - 1):
+            replay._seek(frame)
+            np.testing.assert_allclose(meshes[0].vertices, plane.vertices, atol=1e-6)
+            shown = np.asarray(meshes[1].vertices, float)
+            np.testing.assert_allclose(shown, ball.place_at(sphere.vertices, take.time[frame]),
+                                       atol=1e-6)
+            np.testing.assert_allclose(shown.mean(axis=0), [take.time[frame], 0.5, 0.0],
+                                       atol=1e-3)
+    finally:
+        replay.stop()
+
+
 def chromium() -> str:
     found = shutil.which("chromium") or shutil.which("chromium-browser")
     if found is None:

@@ -41,6 +41,7 @@ import numpy as np
 from ._jit import inline_kernel, kernel
 from .bodies.pins import followed_terrain
 from .motion import POSE, Motion, pack_motions, pose_into
+from .rivets import riveted_paths
 from .terrains.deforming_mesh import deform, deformed_velocity
 from .terrains import still_terrain_distance, terrain_distance
 
@@ -48,8 +49,10 @@ from .terrains import still_terrain_distance, terrain_distance
 def pack_world(terrains, built, offsets) -> dict:
     """The model's arrays of the moving world: the motions of the moving terrains (in the
     order of their terrain_motion rows) and of the pins that move (bodies/pins.py), their
-    poses at time 0, and each moving pin's particles. A pin that follows a terrain takes that
-    terrain's row; one that follows a still terrain just holds."""
+    poses at time 0, and each moving pin's particles. A pin that follows a terrain moving
+    rigidly takes that terrain's row; one that follows a deforming terrain a path of its own for
+    each particle (rivets.py); one that follows a still terrain holds, as a pin without motion
+    does."""
     motions = [(terrain.motion, terrain.anchor()) for terrain in terrains
                if terrain.motion is not None]
     rows = {t: r for r, t in enumerate(t for t, terrain in enumerate(terrains)
@@ -58,17 +61,21 @@ def pack_world(terrains, built, offsets) -> dict:
     for body, start in zip(built, offsets):
         for chosen, pin, paths in body.moving_pins:
             where = body.positions[chosen]
+            if paths is None and pin.follow and terrains[followed_terrain(pin)].deforms():
+                surface = terrains[followed_terrain(pin)].deforming_surface()
+                paths = riveted_paths(surface, where)   # each riveted to its nearest triangle
             if paths is not None:   # an animation: a path of its own for each particle
                 row = np.arange(len(motions), len(motions) + len(chosen))
                 motions += [(path, anchor) for path, anchor in zip(paths, where)]
-            elif pin.motion is not None or not pin.follow:   # a soft pin that holds: no motion
+            elif pin.motion is not None or rows.get(followed_terrain(pin), -1) < 0:
+                # its own motion, or it holds (a soft pin, or one following a still terrain)
+                if pin.motion is None and pin.stiffness is None:
+                    continue   # a hard pin that holds: its particles have no mass to move
                 row = len(motions)
                 motions.append((pin.motion or Motion(), where.mean(axis=0)))
             else:
                 terrain = terrains[followed_terrain(pin)]
-                row = rows.get(followed_terrain(pin), -1)
-                if row < 0:
-                    continue   # it follows a terrain that stands still: a pin that holds
+                row = rows[followed_terrain(pin)]
                 # they keep the place they start at in the terrain's frame: where that place
                 # was when the terrain was placed, x = R0^T (x_start - c0) + pivot
                 pose = terrain.motion.pose(0.0, terrain.anchor())

@@ -144,8 +144,8 @@ def followed_terrain(pin: Pin) -> int:
 
 
 def check_follows(pins, terrains, key: str) -> None:
-    """Every ``follow`` names a terrain of the scene that moves rigidly or stands still: a pin
-    keeps its place in the terrain's frame, and a deforming terrain has none."""
+    """Every ``follow`` names a terrain of the scene (its particles keep their place in a rigid
+    terrain's frame, or riveted to a deforming one's nearest triangles: rivets.py)."""
     terrain_count = len(terrains)
     for p, pin in enumerate(pins):
         if pin.follow:
@@ -153,10 +153,6 @@ def check_follows(pins, terrains, key: str) -> None:
                     f"names no terrain: the scene has {terrain_count} "
                     f"(terrains.0 to terrains.{terrain_count - 1})" if terrain_count else
                     "names no terrain: the scene has none")
-            require(getattr(terrains[followed_terrain(pin)], "animation", None) is None,
-                    f"{key}.{p}.follow", pin.follow,
-                    "names a deforming terrain, which has no frame to keep a place in: give "
-                    "the pin an [animation] of the body's points instead")
 
 
 def particle_cache(count: int):

@@ -1,5 +1,5 @@
 """`springsim export RUN.npz OUT`: a recording (or a scene, simulated first) to USD, MDD or PC2
-(with a rest-pose OBJ), or OBJ."""
+(with a rest-pose OBJ), OBJ, or an OBJ a frame."""
 import sys
 from dataclasses import replace
 
@@ -8,14 +8,15 @@ from ..export.take import START_FRAME
 NAME = "export"
 HELP = ("export a recording (the NPZ of `springsim run`), or a scene simulated first, for "
         "Blender, Houdini or Omniverse: .usd/.usda/.usdc, .mdd or .pc2 (with a rest-pose .obj "
-        "beside it), or .obj")
+        "beside it), .obj, or an OBJ sequence (NAME_####.obj)")
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("recording", help="an NPZ file written by `springsim run`, or a scene "
                         "(built-in or .toml) to simulate with its own settings first")
     parser.add_argument("out", nargs="+", metavar="OUT",
-                        help="file(s) to write; the extension picks the format")
+                        help="file(s) to write; the ending picks the format (NAME_####.obj: an OBJ a "
+                        "frame, the #s replaced by the frame number)")
     parser.add_argument("--duration", type=float, metavar="SECONDS",
                         help="a scene's simulated time in s, or the part of a recording to "
                              "export (default: the whole)")
@@ -29,7 +30,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..export import check_target, export, resampled
+    from ..export import check_target, export, listed, resampled
     from ..sampling import check_fps
 
     if args.fps is not None:
@@ -46,7 +47,7 @@ def run(args) -> int:
     for path in args.out:
         written += export(take, path, key="OUT")
     if not args.quiet:
-        print(f"wrote {', '.join(map(str, written))}: {take.frame_count} frames at "
+        print(f"wrote {listed(written)}: {take.frame_count} frames at "
               f"{take.fps:g} fps from frame {take.start_frame}")
     return 0
 

@@ -26,7 +26,8 @@ def add_arguments(parser) -> None:
                              "PNG frames) with springsim.render")
     parser.add_argument("--export", action="append", default=[], metavar="PATH",
                         help="also export the frames: .usd/.usda/.usdc, .mdd or .pc2 (with a "
-                             "rest-pose .obj), .obj (repeatable; see `springsim export`)")
+                             "rest-pose .obj), .obj, NAME_####.obj (an OBJ a frame) "
+                             "(repeatable; see `springsim export`)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar and no summary (errors are still shown)")
     parser.add_argument("--checkpoint-every", type=float, metavar="SECONDS",
@@ -74,7 +75,7 @@ def scene_from_arguments(args):
 def run(args) -> int:
     from ..checkpoint import check_interval, open_checkpoint, record_run
     from ..errors import require
-    from ..export import check_exports, export_recording
+    from ..export import check_exports, export_recording, listed
     from ..plots import plot_energy, plot_format
     from ..recording import write_npz
     from ..safe_files import check_output_path
@@ -127,12 +128,12 @@ def run(args) -> int:
     if args.video:
         problem = write_video_of(simulation, recording, args.video)
         if problem:
-            print(f"springsim run: wrote {', '.join(written)} but no video: {problem}",
+            print(f"springsim run: wrote {listed(written)} but no video: {problem}",
                   file=sys.stderr)
             return 4
         written.append(args.video)
     if not args.quiet:
-        print(f"  {'wrote':<22}{', '.join(written)}")
+        print(f"  {'wrote':<22}{listed(written)}")
     return 0
 
 

@@ -2,22 +2,25 @@
 
 An open set: each format is one module here with ``EXTENSIONS``, ``DESCRIPTION``,
 ``check_available()`` (a SceneError when a dependency is missing), ``outputs(path)`` (the files
-a write makes) and ``write(take, path)``
-(returns the paths written, each whole or not at all); the file's extension chooses the module.
+a write makes) and ``write(take, path)`` (returns the paths written, each whole or not at all);
+the path's ending chooses the module, the longest that matches (``take_####.obj`` is an OBJ
+sequence, ``take.obj`` one OBJ).
 A new format is a new module and its name in ``FORMAT_MODULES``.
 """
 import importlib
+import itertools
 import os
+import re
 
 from ..errors import require
 from .geometry import point_pieces
 from ..safe_files import check_output_path
 from .take import Take, is_recording_file, load_take, names_recording, resampled, take_from_arrays
 
-FORMAT_MODULES = ("usd", "mdd", "pc2", "obj")
+FORMAT_MODULES = ("usd", "mdd", "pc2", "obj", "obj_sequence")
 
 __all__ = ["Take", "check_exports", "check_target", "export", "export_recording", "exporter_for",
-           "extensions", "is_recording_file", "load_take", "names_recording", "resampled", "take_from_arrays"]
+           "extensions", "is_recording_file", "listed", "load_take", "names_recording", "resampled", "take_from_arrays"]
 
 
 def _modules():
@@ -30,12 +33,14 @@ def extensions() -> dict:
 
 
 def exporter_for(path, key: str = "export"):
-    """The format module that writes ``path`` (by its extension); a SceneError if none does."""
-    extension = os.path.splitext(os.fspath(path))[1].lower()
+    """The format module that writes ``path`` (by its longest matching ending); a SceneError if
+    none does."""
+    name = os.fspath(path).lower()
     known = extensions()
-    require(extension in known, key, os.fspath(path),
-            "must end in one of " + ", ".join(known) + " (the extension picks the format)")
-    return known[extension]
+    endings = [ending for ending in known if name.endswith(ending)]
+    require(len(endings) > 0, key, os.fspath(path),
+            "must end in one of " + ", ".join(known) + " (the ending picks the format)")
+    return known[max(endings, key=len)]
 
 
 def check_target(path, key: str = "export"):
@@ -46,6 +51,20 @@ def check_target(path, key: str = "export"):
     for output in module.outputs(path):
         check_output_path(key, output)
     return module
+
+
+def listed(paths) -> str:
+    """The paths written, for a summary line: a numbered sequence (obj_sequence.py) as its first
+    and last file and its count, not a name a frame."""
+    def sequence(path) -> str:
+        return re.sub(r"\d+(?=\.obj$)", "#", os.fspath(path), flags=re.IGNORECASE)
+
+    parts = []
+    for _, group in itertools.groupby(map(os.fspath, paths), key=sequence):
+        group = list(group)
+        parts.append(f"{group[0]} to {group[-1]} ({len(group)} files)" if len(group) > 2
+                     else ", ".join(group))
+    return ", ".join(parts)
 
 
 def check_exports(paths, key: str = "export") -> None:

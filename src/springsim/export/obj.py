@@ -31,10 +31,12 @@ def write(take, path) -> list:
     return [path]
 
 
-def write_obj(path, pieces, vertices: np.ndarray, name: str) -> None:
-    """``pieces`` (geometry.Piece) with their vertices stacked in ``vertices`` (N, 3)."""
+def write_obj(path, pieces, vertices: np.ndarray, name: str, pose: str = "rest pose (frame 0)"
+              ) -> None:
+    """``pieces`` (geometry.Piece) with their vertices stacked in ``vertices`` (N, 3), at
+    ``pose`` (the header's words)."""
     text = io.StringIO()
-    text.write(f"# springsim take {name}: rest pose (frame 0), Y up, metres\no {_token(name)}\n")
+    text.write(f"# springsim take {name}: {pose}, Y up, metres\no {_token(name)}\n")
     np.savetxt(text, vertices, fmt="v %.9g %.9g %.9g")
     first = 1
     for piece, group in zip(pieces, unique_names(_token(p.name) for p in pieces)):

@@ -77,11 +77,15 @@ class WebReplay:
                                        position=first[particle])
             self._parts.append(("balls", ball, lambda x, b=ball, i=particle: setattr(
                 b, "position", x[i])))
-        for name, vertices, triangles, _ in terrain_meshes(self.take.layout, self.take.positions):
+        for name, vertices, triangles, terrain in terrain_meshes(self.take.layout,
+                                                                self.take.positions):
             mesh = scene.add_mesh_simple(f"/terrains/{name}", vertices.astype(np.float32),
                                          triangles.astype(np.uint32),
                                          color=rgb(colors.TERRAIN_COLOR), side="double")
-            self._parts.append(("terrains", mesh, None))
+            moving = terrain.moves()   # where its motion or animation has it at the frame's time
+            self._parts.append(("terrains", mesh, None if not moving else lambda x, m=mesh,
+                                v=vertices, t=terrain: setattr(m, "vertices", t.vertices_at(
+                                    v, self.shown_time()).astype(np.float32))))
         self._add_particles_and_springs(first)
         self._add_pins_and_wind(first)
 
@@ -103,6 +107,10 @@ class WebReplay:
                                      head_length=0.2 * shape.length)
             self._parts.append(("wind", arrow, lambda x, a=arrow, w=shape: setattr(
                 a, "points", self.wind_points(w, self.timeline.frame))))
+
+    def shown_time(self) -> float:
+        """The time (s) of the frame being shown, or about to be (``show``)."""
+        return float(self.take.time[self.timeline.frame])
 
     def wind_points(self, shape, frame: int) -> np.ndarray:
         """The arrow's (1, 2, 3) start and end at ``frame``'s time."""
