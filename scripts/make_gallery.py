@@ -21,6 +21,7 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 WIDTH, HEIGHT, FPS, LONGEST = 320, 180, 10, 3.0
+CAMERAS = {"cape": "side"}   # the cape lies on the figure's back: seen from the side, not behind it
 
 
 def render_scene(name: str, duration: float, out: Path) -> None:
@@ -28,7 +29,8 @@ def render_scene(name: str, duration: float, out: Path) -> None:
         frames = Path(folder) / "frames"
         subprocess.run([sys.executable, "-m", "springsim", "render", name, "--out", str(frames),
                         "--duration", f"{duration:g}", "--fps", str(FPS), "--width", str(WIDTH),
-                        "--height", str(HEIGHT), "--quiet"], check=True)
+                        "--height", str(HEIGHT), "--camera", CAMERAS.get(name, "auto"),
+                        "--quiet"], check=True)
         images = [Image.open(path).convert("RGB") for path in sorted(frames.glob("*.png"))]
         if not images:
             raise SystemExit(f"springsim render wrote no frames for {name}")

@@ -24,7 +24,8 @@ SECONDS = 6.0
 WALK_SPEED = 0.8            # m/s along its heading
 TURN_RATE = 0.35            # rad/s about the vertical
 STRIDE_RATE = 2 * np.pi * 0.9   # rad/s: a leg swings forward and back 0.9 times a second
-SHOULDER = np.array([0.0, 1.45, 0.0])   # where the cape's top edge is, on the figure
+NECK = np.array([0.0, 1.575, 0.0])   # the top of the body, where the cape's front edge is pinned
+NECK_HALF_WIDTH = 0.12                # m: the pinned stretch of it, clear of the swinging arms
 
 
 class Part(NamedTuple):
@@ -108,19 +109,3 @@ def figure_files() -> FigureFiles:
         file.write("".join(f"f {a + 1} {b + 1} {c + 1}\n"
                            for a, b, c in np.concatenate(faces)).encode())
     return files
-
-
-def shoulder_keyframes() -> list:
-    """The keyframes (motion.py) of the cape's pins: the figure's root motion, one per frame,
-    about the origin (pivot (0, 0, 0))."""
-    from .motion import Keyframe
-
-    frames = []
-    for t in np.arange(int(round(SECONDS * FPS)) + 1) / FPS:
-        turn, centre = root(t)
-        rotvec = Rotation.from_matrix(turn).as_rotvec()
-        angle = float(np.linalg.norm(rotvec))
-        axis = tuple(rotvec / angle) if angle > 0 else (0.0, 1.0, 0.0)
-        frames.append(Keyframe(time=float(t), position=tuple(map(float, centre)),
-                               rotation_degrees=float(np.degrees(angle)), rotation_axis=axis))
-    return frames
