@@ -3,7 +3,8 @@ real-time step (issue 30's bar: a 1/60 s step in at most 16.7 ms, the figure's c
 CHOLMOD (SuiteSparse, through scikit-sparse) on the system the cape solves one second in, and
 the same factor kept as a preconditioner for the systems of the steps after it.
 
-    .venv/bin/pip install "scikit-sparse<0.4.15"   # needs SuiteSparse: apt-get install libsuitesparse-dev
+    apt-get install libsuitesparse-dev          # SuiteSparse, which scikit-sparse builds on
+    .venv/bin/pip install "scikit-sparse<0.4.15"
     .venv/bin/python benchmarks/cape_direct_solve.py
 
 For each of CHOLMOD's simplicial and supernodal factorizations in nested-dissection order: the

@@ -293,8 +293,8 @@ def rotation(axis, angle):
     return np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * cross @ cross
 
 
-@pytest.mark.parametrize("integrator, dt, every", [("symplectic_euler", 1e-4, 50),
-                                                   ("rk4", 1e-4, 50), ("implicit_euler", 1 / 60, 1)])
+@pytest.mark.parametrize("integrator, dt, every", [
+    ("symplectic_euler", 1e-4, 50), ("rk4", 1e-4, 50), ("implicit_euler", 1 / 60, 1)])
 def test_pins_following_a_deforming_terrain_ride_riveted_to_its_triangles(tmp_path, integrator,
                                                                           dt, every):
     """A plate that a cache turns and lifts rigidly, and a cloth above it whose two corners

@@ -292,6 +292,19 @@ def test_an_obj_sequence_is_written_whole_or_not_at_all(recorded, tmp_path, monk
     with pytest.raises(OSError):
         export(take, tmp_path / "frame_####.obj")
     assert os.listdir(tmp_path) == []
+    (tmp_path / "frame_0003.obj").mkdir()       # a frame's name taken by a folder: refused first
+    with pytest.raises(SceneError, match="frame_0003.obj.: is a folder"):
+        export(take, tmp_path / "frame_####.obj")
+    assert os.listdir(tmp_path) == ["frame_0003.obj"]
+
+
+def test_an_obj_sequence_refuses_a_negative_start_frame_before_reading_the_take(tmp_path,
+                                                                              capsys):
+    code = main(["export", str(tmp_path / "missing.npz"), str(tmp_path / "f_##.obj"),
+                 "--start-frame", "-1"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--start-frame" in err and "0 or more" in err, err
+    assert len(err.splitlines()) == 1 and os.listdir(tmp_path) == []
 
 
 def _obj_faces(path) -> np.ndarray:

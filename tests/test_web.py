@@ -131,6 +131,11 @@ def test_a_moving_terrain_is_drawn_where_its_motion_has_it_at_the_frames_time(tm
                                        atol=1e-6)
             np.testing.assert_allclose(shown.mean(axis=0), [take.time[frame], 0.5, 0.0],
                                        atol=1e-3)
+        replay.set_drawn("terrains", False)              # hidden, moved on, shown again
+        replay._seek(1)
+        replay.set_drawn("terrains", True)
+        np.testing.assert_allclose(meshes[1].vertices,
+                                   ball.place_at(sphere.vertices, take.time[1]), atol=1e-6)
     finally:
         replay.stop()
 

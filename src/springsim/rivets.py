@@ -4,8 +4,9 @@ A deforming mesh has no rigid frame for a pin to keep its place in, but each of 
 has one: its closest point to the particle (fixed barycentric weights) and the directions of its
 first edge and its normal. A particle is riveted where it starts: the weights of the closest
 point on its nearest triangle, and its offset from that point in the triangle's frame, so a
-particle off the surface keeps its distance and side as the surface bends and turns (a
-degenerate triangle has no frame: a rivet on it keeps to the closest point). At each
+particle off the surface keeps its distance and side as the surface bends and turns (a triangle
+with no area has no frame, and takes no rivet). A rivet holds at any distance from the surface:
+a pin far from it rides on a long lever off one small triangle. At each
 sample of the terrain's point cache the rivet is where those give, and the pin's path
 (motion.Path) runs through those places, linear between samples as the surface itself is.
 """
@@ -18,16 +19,23 @@ from .terrains.deforming_mesh import DeformingSurface, surface_at
 
 def riveted_paths(surface: DeformingSurface, positions: np.ndarray) -> list:
     """A Path for each of ``positions`` (n, 3; where the particles are at time 0), from its
-    start to its rivet's place at each of the surface's sample times."""
+    start to its rivet's place at each of the surface's sample times (and at time 0 itself, on
+    its start, where that falls between two samples)."""
     corners = surface_at(surface, 0.0)[surface.triangles]
-    row, weights, _ = nearest_triangles(positions, corners)
+    usable = np.flatnonzero(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                                    corners[:, 2] - corners[:, 0]), axis=1) > 0)
+    row, weights, _ = nearest_triangles(positions, corners[usable])
+    row = usable[row]                      # a triangle with no area has no frame to ride in
     closest = np.einsum("nk,nkc->nc", weights, corners[row])
     offset = np.einsum("nij,nj->ni", triangle_frames(corners[row]), positions - closest)
     moving = surface.samples[:, surface.triangles[row]]               # (F, n, 3 corners, 3)
     placed = np.einsum("nk,fnkc->fnc", weights, moving) + \
         np.einsum("fnic,ni->fnc", triangle_frames(moving), offset)
-    return [Path(times=surface.times, displacements=placed[:, j] - positions[j])
-            for j in range(len(positions))]
+    times, displacements = surface.times, placed - positions
+    if times[0] < 0.0 < times[-1] and not np.any(times == 0.0):
+        at = int(np.searchsorted(times, 0.0))
+        times, displacements = np.insert(times, at, 0.0), np.insert(displacements, at, 0.0, 0)
+    return [Path(times=times, displacements=displacements[:, j]) for j in range(len(positions))]
 
 
 def triangle_frames(corners: np.ndarray) -> np.ndarray:
@@ -40,7 +48,7 @@ def triangle_frames(corners: np.ndarray) -> np.ndarray:
 
 
 def unit(vectors: np.ndarray) -> np.ndarray:
-    """Each vector (..., 3) over its length; zero where it has none (a degenerate triangle,
-    whose rivet then keeps no offset from its closest point)."""
+    """Each vector (..., 3) over its length; zero where it has none (a triangle that a cache
+    folds flat later keeps its rivet on its closest point for that sample)."""
     length = np.linalg.norm(vectors, axis=-1, keepdims=True)
     return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)

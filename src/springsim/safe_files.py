@@ -138,6 +138,29 @@ def staged_paths(paths):
 
 
 @contextlib.contextmanager
+def staged_files(paths):
+    """Paths to write instead of ``paths``, all in one folder (a numbered sequence: hundreds of
+    files, each too small for a staging folder of its own): once every one is written, all
+    are put on disk, then renamed onto their targets; if any is not written, none is."""
+    targets = [Path(os.path.abspath(os.fspath(path))) for path in paths]
+    staged = StagedOutput(targets[0], folder=True)
+    try:
+        yield [staged.path / target.name for target in targets]
+        for target in targets:
+            _fsync(staged.path / target.name, os.O_RDONLY | os.O_NOFOLLOW)
+        for target in targets:
+            _give_usual_mode(staged.path / target.name)
+            os.replace(staged.path / target.name, target)
+        _sync_folder(targets[0].parent)
+    except OSError as error:
+        if isinstance(error, OutputFailed):
+            raise
+        raise OutputFailed(targets[0], error) from None
+    finally:
+        staged.discard()
+
+
+@contextlib.contextmanager
 def atomic_output(path):
     """A binary file object that becomes ``path`` only if the block finishes without an error."""
     with staged_path(path) as staged:

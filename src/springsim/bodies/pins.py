@@ -20,7 +20,8 @@ Where the chosen particles go:
   frame, x(t) = pivot + position(t) + R(t) (x_start - pivot), the pivot defaulting to the mean of
   the chosen particles' starting positions;
 - ``follow = "terrains.N"``: the particles keep their place in terrain N's moving frame (its own
-  motion, about its own pivot); a terrain that does not move holds them still;
+  motion, about its own pivot); a terrain that does not move holds them still; on a deforming
+  terrain each is riveted to the triangle nearest to it (rivets.py);
 - ``animation``: a point cache (animation.py) of the body's own points, as an animated copy of
   it in Blender or Houdini writes it: each chosen particle goes where its point goes. The cache
   lists a mesh cloth's file vertices (file order, the file's frame: placed as the cloth is), or

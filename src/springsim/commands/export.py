@@ -15,8 +15,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("recording", help="an NPZ file written by `springsim run`, or a scene "
                         "(built-in or .toml) to simulate with its own settings first")
     parser.add_argument("out", nargs="+", metavar="OUT",
-                        help="file(s) to write; the ending picks the format (NAME_####.obj: an OBJ a "
-                        "frame, the #s replaced by the frame number)")
+                        help="file(s) to write; the ending picks the format (NAME_####.obj: "
+                        "an OBJ a frame, the #s replaced by the frame number)")
     parser.add_argument("--duration", type=float, metavar="SECONDS",
                         help="a scene's simulated time in s, or the part of a recording to "
                              "export (default: the whole)")
@@ -38,7 +38,9 @@ def run(args) -> int:
 
     # every target is checked before the recording is read: a typo costs nothing
     for path in args.out:
-        check_target(path, key="OUT")
+        module = check_target(path, key="OUT")
+        if hasattr(module, "check_start_frame"):   # a format that numbers files by frame
+            module.check_start_frame(path, args.start_frame, "--start-frame")
     take = read_take(args)
     if args.fps is not None and (args.fps != take.fps or args.duration is not None):
         take = resampled(take, args.fps, args.duration)

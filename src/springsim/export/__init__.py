@@ -20,7 +20,8 @@ from .take import Take, is_recording_file, load_take, names_recording, resampled
 FORMAT_MODULES = ("usd", "mdd", "pc2", "obj", "obj_sequence")
 
 __all__ = ["Take", "check_exports", "check_target", "export", "export_recording", "exporter_for",
-           "extensions", "is_recording_file", "listed", "load_take", "names_recording", "resampled", "take_from_arrays"]
+           "extensions", "is_recording_file", "listed", "load_take", "names_recording",
+           "resampled", "take_from_arrays"]
 
 
 def _modules():
@@ -81,7 +82,7 @@ def export_recording(recording, paths, key: str = "export") -> list[str]:
 
 
 def export(take: Take, path, key: str = "export") -> list:
-    """Write ``take`` to ``path`` in the format its extension names; the paths written."""
+    """Write ``take`` to ``path`` in the format its ending names; the paths written."""
     module = check_target(path, key)
     check_memory(take, key, path)
     return module.write(take, path)

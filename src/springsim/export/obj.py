@@ -31,20 +31,26 @@ def write(take, path) -> list:
     return [path]
 
 
-def write_obj(path, pieces, vertices: np.ndarray, name: str, pose: str = "rest pose (frame 0)"
-              ) -> None:
+def write_obj(path, pieces, vertices: np.ndarray, name: str, pose: str = "rest pose (frame 0)",
+              faces: str | None = None) -> None:
     """``pieces`` (geometry.Piece) with their vertices stacked in ``vertices`` (N, 3), at
-    ``pose`` (the header's words)."""
+    ``pose`` (the header's words); ``faces``: their ``faces_text``, made once for a sequence."""
     text = io.StringIO()
     text.write(f"# springsim take {name}: {pose}, Y up, metres\no {_token(name)}\n")
     np.savetxt(text, vertices, fmt="v %.9g %.9g %.9g")
-    first = 1
+    text.write(faces_text(pieces) if faces is None else faces)
+    with open(path, "x", encoding="utf-8") as file:
+        file.write(text.getvalue())
+
+
+def faces_text(pieces) -> str:
+    """The ``g`` and ``f`` lines of ``pieces``: a group a piece, vertices counted from 1."""
+    text, first = io.StringIO(), 1
     for piece, group in zip(pieces, unique_names(_token(p.name) for p in pieces)):
         text.write(f"g {group}\n")
         np.savetxt(text, piece.triangles + first, fmt="f %d %d %d")
         first += piece.vertex_count
-    with open(path, "x", encoding="utf-8") as file:
-        file.write(text.getvalue())
+    return text.getvalue()
 
 
 def _token(name: str) -> str:

@@ -46,6 +46,7 @@ class WebReplay:
         self.server.scene.set_up_direction("+y")
         self._parts = []            # (toggle name, handle, update(positions) or None)
         self._shown_frame = -1
+        self._drawn_time = 0.0      # s: the time of the frame being drawn
         self._thread, self._stop = None, threading.Event()
         self._add_scene()
         self._add_gui()
@@ -82,10 +83,7 @@ class WebReplay:
             mesh = scene.add_mesh_simple(f"/terrains/{name}", vertices.astype(np.float32),
                                          triangles.astype(np.uint32),
                                          color=rgb(colors.TERRAIN_COLOR), side="double")
-            moving = terrain.moves()   # where its motion or animation has it at the frame's time
-            self._parts.append(("terrains", mesh, None if not moving else lambda x, m=mesh,
-                                v=vertices, t=terrain: setattr(m, "vertices", t.vertices_at(
-                                    v, self.shown_time()).astype(np.float32))))
+            self._parts.append(("terrains", mesh, self._terrain_update(mesh, vertices, terrain)))
         self._add_particles_and_springs(first)
         self._add_pins_and_wind(first)
 
@@ -108,9 +106,13 @@ class WebReplay:
             self._parts.append(("wind", arrow, lambda x, a=arrow, w=shape: setattr(
                 a, "points", self.wind_points(w, self.timeline.frame))))
 
-    def shown_time(self) -> float:
-        """The time (s) of the frame being shown, or about to be (``show``)."""
-        return float(self.take.time[self.timeline.frame])
+    def _terrain_update(self, mesh, vertices, terrain):
+        """For a terrain that moves or deforms, what puts its mesh where it is at the time of
+        the frame being drawn; None for a still one."""
+        if not terrain.moves():
+            return None
+        return lambda x: setattr(mesh, "vertices", terrain.vertices_at(
+            vertices, self._drawn_time).astype(np.float32))
 
     def wind_points(self, shape, frame: int) -> np.ndarray:
         """The arrow's (1, 2, 3) start and end at ``frame``'s time."""
@@ -202,12 +204,14 @@ class WebReplay:
         for toggle, handle, update in self._parts:
             if toggle == name:
                 if shown and update is not None:
+                    self._drawn_time = float(self.take.time[self.timeline.frame])
                     update(self.take.positions[self.timeline.frame])
                 handle.visible = shown
 
     def show(self, frame: int) -> None:
         """Send the positions of ``frame`` to the browser (for the parts shown)."""
         positions = self.take.positions[frame]
+        self._drawn_time = float(self.take.time[frame])   # the moving terrains' (_terrain_update)
         with self.server.atomic():
             for toggle, handle, update in self._parts:
                 if update is not None and getattr(self.draw, toggle):
