@@ -18,15 +18,15 @@ import time
 
 import numpy as np
 import scipy.sparse as sparse
-import scipy.sparse.linalg as linalg
 
 import springsim
 from springsim.implicit.jacobian import assemble_system
 from springsim.implicit.pattern import build_block_pattern
 from springsim.reference import reference_forces
 
+from preconditioner_options import iterations   # CG to TOLERANCE, counted
+
 H = 1 / 60
-TOLERANCE = 1e-5
 LATER = (1, 5, 10)   # steps after the factored system
 
 
@@ -70,17 +70,6 @@ def factor_times(matrix, b, mode: str) -> str:
             f"{symbolic.L().nnz:,} entries, {np.sum(columns ** 2) / 1e6:.0f} M flops")
 
 
-def stale_iterations(factor, matrix, b) -> int:
-    count = [0]
-
-    def counted(_):
-        count[0] += 1
-
-    linalg.cg(matrix, b, rtol=TOLERANCE, maxiter=3000, callback=counted,
-              M=linalg.LinearOperator(matrix.shape, factor))
-    return count[0]
-
-
 def main():
     try:
         from sksparse.cholmod import cholesky
@@ -95,7 +84,7 @@ def main():
     factor = cholesky(matrix, mode="simplicial", ordering_method="nesdis")
     for steps, (later, load) in zip(LATER, systems[1:]):
         print(f"{steps} steps later, preconditioned by the factor at 1 s: "
-              f"{stale_iterations(factor, later, load)} iterations", flush=True)
+              f"{iterations(later, load, factor)} iterations", flush=True)
 
 
 if __name__ == "__main__":
