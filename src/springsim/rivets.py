@@ -6,9 +6,10 @@ first edge and its normal. A particle is riveted where it starts: the weights of
 point on its nearest triangle, and its offset from that point in the triangle's frame, so a
 particle off the surface keeps its distance and side as the surface bends and turns (a triangle
 with no area has no frame, and takes no rivet). A rivet holds at any distance from the surface:
-a pin far from it rides on a long lever off one small triangle. At each
-sample of the terrain's point cache the rivet is where those give, and the pin's path
-(motion.Path) runs through those places, linear between samples as the surface itself is.
+a pin far from it rides on a long lever off one small triangle. At each sample of the
+terrain's point cache the rivet is where those give, and the pin's path (motion.Path) runs
+through those places, linear between samples (as the closest point is; the offset follows the
+chord between the frames of two samples).
 """
 import numpy as np
 

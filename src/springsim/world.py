@@ -60,22 +60,21 @@ def pack_world(terrains, built, offsets) -> dict:
     particles, rows_of_pins, placed, stiffness, damping = [], [], [], [], []
     for body, start in zip(built, offsets):
         for chosen, pin, paths in body.moving_pins:
-            where = body.positions[chosen]
-            if paths is None and pin.follow and terrains[followed_terrain(pin)].deforms():
-                surface = terrains[followed_terrain(pin)].deforming_surface()
-                paths = riveted_paths(surface, where)   # each riveted to its nearest triangle
+            where, followed = body.positions[chosen], followed_terrain(pin)
+            if paths is None and followed >= 0 and terrains[followed].deforms():
+                # each riveted to its nearest triangle
+                paths = riveted_paths(terrains[followed].deforming_surface(), where)
             if paths is not None:   # an animation: a path of its own for each particle
                 row = np.arange(len(motions), len(motions) + len(chosen))
                 motions += [(path, anchor) for path, anchor in zip(paths, where)]
-            elif pin.motion is not None or rows.get(followed_terrain(pin), -1) < 0:
+            elif pin.motion is not None or rows.get(followed, -1) < 0:
                 # its own motion, or it holds (a soft pin, or one following a still terrain)
                 if pin.motion is None and pin.stiffness is None:
                     continue   # a hard pin that holds: its particles have no mass to move
                 row = len(motions)
                 motions.append((pin.motion or Motion(), where.mean(axis=0)))
             else:
-                terrain = terrains[followed_terrain(pin)]
-                row = rows[followed_terrain(pin)]
+                terrain, row = terrains[followed], rows[followed]
                 # they keep the place they start at in the terrain's frame: where that place
                 # was when the terrain was placed, x = R0^T (x_start - c0) + pivot
                 pose = terrain.motion.pose(0.0, terrain.anchor())
