@@ -173,10 +173,14 @@ def find_constraints(physical, x, v, h, previous_kind, previous_terrain, lookups
         at[better], ahead[better] = lookup.at[better], lookup.ahead[better]
         if lookup.surface is not None:
             surface[better] = lookup.surface[better]
+    epsilon = epsilons[np.maximum(terrain, 0)]
+    s_n = rowdot(surface, normal)
+    joins = (phi_best < epsilon) | (phi_best + h * v_n_best < 0.0)
+    released = (previous_kind == FREE) & (previous_terrain >= 0)
+    terrain[released & ~joins] = -1   # constraints.joins_afresh
     contact = terrain >= 0
     kind[contact] = CONTACT
-    epsilon = epsilons[np.maximum(terrain, 0)]
-    floor, case = floor_of(phi_best, v_n_best, rowdot(surface, normal), h, epsilon)
+    floor, case = floor_of(phi_best, v_n_best, s_n, h, epsilon)
     floor[~contact] = 0.0
     continues = contact & (previous_kind == CONTACT) & (previous_terrain == terrain)
     return Constraints(kind, terrain, normal, floor, case, surface, at, ahead), continues

@@ -19,7 +19,9 @@ is the closest point's, interpolated from its triangle's corners (``deformed_vel
 A lookup skips a listed triangle whose bounding sphere (its centroid and farthest corner,
 refitted with the normals) lies farther than the closest triangle found so far: a cell lists
 every triangle within reach of any of its points, dozens to hundreds where a fast limb makes
-reach large, and most are far from the point asking.
+reach large, and most are far from the point asking. Each entry of a cell holds its triangle's
+sphere beside its number (ENTRY values), so that the skipping reads the cell's entries in order
+instead of each triangle's sphere wherever it lies in memory.
 ``reach`` is the larger of 4 contact bands (``epsilon``) and the farthest a vertex moves between
 two samples of the cache, plus the largest offset a particle keeps from terrains (a ball's
 radius): a particle the surface passes within one sample is still found, and so is a ball's
@@ -39,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import inline_kernel, kernel
 from ..animation import Animation, interpolated_points
 from ..collision.distance.closest_points import closest_on_triangle
 from ..meshfiles import fan_triangles, first_file_vertex, read_mesh_file, weld
@@ -48,6 +50,7 @@ from .base import register
 HEADER = 16
 MAX_CELLS = 64 ** 3
 BAND_REACH = 4.0   # reach in contact bands (epsilon), at the least
+ENTRY = 5          # values a cell entry holds: the triangle, its sphere's centre and radius
 VERTICES, TRIANGLES, EDGES, SAMPLES, CAPACITY, LAST_TIME, REACH, CELLS = range(8)
 ORIGIN, CELL, COUNTS = 8, 11, 12
 
@@ -83,7 +86,7 @@ def deform(data, s, t):
     interpolate(data, s, t, times, samples, positions, velocities)
     refit_normals(data, s, triangles, triangle_edges, positions, vertex_normals, edge_normals,
                   face_normals, spheres)
-    refit_cells(data, s, triangles, positions, cell_starts, entries)
+    refit_cells(data, s, triangles, positions, spheres, cell_starts, entries)
     data[s + LAST_TIME] = t
 
 
@@ -195,9 +198,9 @@ def cell_range(data, s, axis, low, high):
 
 
 @kernel
-def refit_cells(data, s, triangles, positions, cell_starts, entries):
-    """List each triangle in the cells its box grown by reach covers (module doc); triangles in
-    ascending order within a cell."""
+def refit_cells(data, s, triangles, positions, spheres, cell_starts, entries):
+    """List each triangle in the cells its box grown by reach covers, with its bounding sphere
+    (refit_normals' spheres: module doc); triangles in ascending order within a cell."""
     t, cells = int(data[s + TRIANGLES]), int(data[s + CELLS])
     n1, n2 = int(data[s + COUNTS + 1]), int(data[s + COUNTS + 2])
     capacity = int(data[s + CAPACITY])
@@ -226,11 +229,19 @@ def refit_cells(data, s, triangles, positions, cell_starts, entries):
                         else:
                             slot = int(data[cell_starts + c])
                             if slot < capacity:
-                                data[entries + slot] = tri
+                                write_entry(data, entries + ENTRY * slot, tri, spheres)
                             data[cell_starts + c] = slot + 1
     for c in range(cells, 0, -1):   # each cell's end is the next one's start
         data[cell_starts + c] = data[cell_starts + c - 1]
     data[cell_starts] = 0.0
+
+
+@inline_kernel
+def write_entry(data, at, tri, spheres):
+    """A cell entry at ``at``: the triangle's number, then its bounding sphere (module doc)."""
+    data[at] = tri
+    for k in range(4):
+        data[at + 1 + k] = data[spheres + 4 * tri + k]
 
 
 @kernel
@@ -264,12 +275,12 @@ def closest_triangle(data, s, x0, x1, x2):
     (times, samples, triangles, triangle_edges, positions, velocities, vertex_normals,
      edge_normals, face_normals, spheres, cell_starts, entries) = layout(data, s)
     for e in range(int(data[cell_starts + index]), int(data[cell_starts + index + 1])):
-        tri = int(data[entries + e])
-        g0, g1, g2 = (x0 - data[spheres + 4 * tri], x1 - data[spheres + 4 * tri + 1],
-                      x2 - data[spheres + 4 * tri + 2])
-        far = bound + data[spheres + 4 * tri + 3]
+        entry = entries + ENTRY * e
+        g0, g1, g2 = x0 - data[entry + 1], x1 - data[entry + 2], x2 - data[entry + 3]
+        far = bound + data[entry + 4]
         if g0 * g0 + g1 * g1 + g2 * g2 > far * far:
             continue
+        tri = int(data[entry])
         a, b, c = (int(data[triangles + 3 * tri]), int(data[triangles + 3 * tri + 1]),
                    int(data[triangles + 3 * tri + 2]))
         corners = ((data[positions + 3 * a], data[positions + 3 * a + 1],
@@ -405,7 +416,7 @@ class DeformingSurface:
             cells]
         header[ORIGIN:ORIGIN + 3], header[CELL], header[COUNTS:COUNTS + 3] = origin, cell, counts
         written = np.zeros(3 * count * 3 + 3 * len(edges) + 7 * len(self.triangles)
-                           + cells + 1 + capacity)
+                           + cells + 1 + ENTRY * capacity)
         block = np.concatenate([header, self.times, self.samples.ravel(),
                                 self.triangles.ravel().astype(float),
                                 triangle_edges.ravel().astype(float), written])
