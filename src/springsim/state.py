@@ -21,7 +21,7 @@ class ContactMemory(NamedTuple):
     and its last velocity change, the next solve's first guess."""
 
     kind: np.ndarray              # (P,) int8: free, pinned or in contact
-    terrain: np.ndarray           # (P,) int64: the terrain touched, or that released it, or -1
+    terrain: np.ndarray           # (P,) int64: the terrain touched; free: a release's mark; -1
     normal_floor: np.ndarray      # (P,) m/s: the lowest normal velocity the contact allows
     friction_damping: np.ndarray  # (P,) friction carried into the next step's matrix
     velocity_change: np.ndarray   # (P, 3) m/s: the last step's v_new - v

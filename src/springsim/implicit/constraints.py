@@ -10,16 +10,18 @@ Contact, as collision/response/terrain.py does it but for a whole implicit step:
   what keeps large steps honest: a particle falling 0.4 m per step would otherwise be driven deep
   into the terrain by the solve and then lifted out alone, crushing the lattice above it.
   A particle that a solve released (its terrain would have had to pull) is not looked ahead
-  for again while it stays free: outside the band it joins at a step's start only if it would
-  end the step inside (phi + h v_n < 0), and otherwise joins if the solve carries it inside
-  (the update below). Its memory keeps the terrain that released it (``joins_afresh``).
+  for again while it stays free and within a terrain's reach: outside the band it joins at a
+  step's start only if it would end the step inside (phi + h v_n < 0), and otherwise joins if
+  the solve carries it inside (the update below). Its memory marks it with a terrain (the one
+  that released it, then the one its look-ahead finds first), cleared once no terrain is in
+  reach (``joins_afresh``).
   Without that, cloth lying on a figure that walks away under it had hundreds of its
   particles just outside the band taken as contacts at every step only for the first update
   to release them again, each release costing a solve. A particle never released keeps the
   look-ahead: a layer of cloth pressed down fast onto another is stopped on the floor's
-  surface, not first carried into it. The band itself is as before for every particle: a
-  rule there (say, free while moving away) would flip resting particles in and out at every
-  step, and make the run jump with the smallest change of a parameter.
+  surface, not first carried into it. The band itself is as before (for the terrain reached
+  first): a rule there (say, free while moving away) would flip resting particles in and out
+  at every step, and make the run jump with the smallest change of a parameter.
 - A contact's normal velocity at the end of the step is held at a floor v'_n = bound:
   outside the band, bound = -phi/h: it may end the step on the surface, not beyond; in the band,
   bound = max(min(v_n, 0), -phi/h): the terrain cancels the forces that would push the particle in
@@ -147,7 +149,8 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without. ``kind`` and ``terrain``
     come in as the last step left them: a free particle with a terrain is one a solve released
-    (update_contacts), which must also pass ``joins_afresh``, and stays marked if it does not."""
+    (update_contacts), which must also pass ``joins_afresh``, and stays marked (with the
+    terrain found now) if it does not."""
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
