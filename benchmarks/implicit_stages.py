@@ -70,7 +70,7 @@ def solve(timer, model, scratch, state, contacts, h):
             changed = timer("terrain contact updates", constraints.update_contacts, model, pattern,
                             work.blocks, work.rhs, x, v, work.dv, work.ddv, h, kind, normal,
                             work.surface, memory.terrain, floor, memory.friction_damping,
-                            work.reaction)
+                            work.reaction, work.lookups)
             changed = update_active_contacts(contacts, h, work.ddv, work.rhs) > 0 or changed
             released = int(np.sum((before == CONTACT) & (kind == FREE)))
             joined = int(np.sum((before == FREE) & (kind == CONTACT)))
@@ -100,7 +100,7 @@ def step(timer, model, scratch, state, start, h, done, pairs):
     aim_pins(model, x, v, h)
     timer("contact search", constraints.find_constraints, model, x, v, h, memory.kind,
           work.normal, work.surface, memory.terrain, memory.normal_floor,
-          memory.friction_damping)
+          memory.friction_damping, work.lookups)
     at_start = int(np.sum(memory.kind == CONTACT))
     own, pairs = timer("own pairs", own_pairs_touching, model, x, pairs)
     contacts = timer("body contacts", find_solve_contacts, model, x, v, h, scratch.solve_pairs,
@@ -143,8 +143,8 @@ def main() -> None:
     h = float(simulation.dt)
     model.clock[0] = state.time
     implicit = method.ImplicitState(state.positions, state.velocities, state.contacts)
-    scratch = method.Scratch(layout, settings, method.workspace(layout, implicit.x),
-                             state.solve_pairs, method.Statistics.zeros(),
+    work = method.workspace(layout, implicit.x, model.terrain_epsilon.shape[0])
+    scratch = method.Scratch(layout, settings, work, state.solve_pairs, method.Statistics.zeros(),
                              method.saved_state(implicit), method.saved_state(implicit))
     pairs = _steps.pairs_now(model, implicit.x, state.pairs)
     start = _steps.step_start(model, implicit.x)

@@ -377,7 +377,8 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
     arrays = simulation.model.arrays
     layout = simulation.integrator.pattern(simulation.model)
     state = ImplicitState(simulation.positions, simulation.velocities, simulation.state.contacts)
-    scratch = Scratch(layout, Settings(1, 1e-8, 1000), workspace(layout, simulation.positions),
+    work = workspace(layout, simulation.positions, arrays.terrain_epsilon.shape[0])
+    scratch = Scratch(layout, Settings(1, 1e-8, 1000), work,
                       kept_surface_pairs(simulation.positions), Statistics.zeros(),
                       saved_state(state), saved_state(state))
     no_pairs = no_pair_list()   # no self-colliding surface: no pair of one body for the solve

@@ -78,9 +78,22 @@ def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
 
 
 @inline_kernel
-def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
+def look_up_terrains(terrains, radius, x, i, lookups):
+    """Each terrain's (phi, normal) at particle i's position at the step's start, into
+    ``lookups[i, t]``. The terrains stand where the step's end has them for the whole step, so
+    this is what every closest_terrain of the step would ask at that point: found once by
+    find_constraints, read by each update_contacts after it (``radius``: the particle's
+    model.terrain_offset[i])."""
+    for t in range(lookups.shape[1]):
+        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
+        lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3] = phi, mx, my, mz
+
+
+@inline_kernel
+def closest_terrain(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, in_reach):
     """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
-    normal and the normal velocity; terrain -1 if it reaches none.
+    normal and the normal velocity; terrain -1 if it reaches none. Each terrain's phi and
+    normal at the particle come from ``lookups`` (look_up_terrains).
 
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
     start of a step); without, it means ending the step inside (phi + h u_n < 0). Beyond a
@@ -93,7 +106,7 @@ def closest_terrain(terrains, epsilon, radius, x, i, u0, u1, u2, h, in_reach):
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
+        phi, mx, my, mz = lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3]
         if phi == math.inf:
             phi, mx, my, mz = swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius,
                                            2.0 * epsilon[t])
@@ -144,13 +157,14 @@ def make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, norm
 
 @kernel
 def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floor,
-                     friction_damping):
+                     friction_damping, lookups):
     """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without. ``kind`` and ``terrain``
     come in as the last step left them: a free particle with a terrain is one a solve released
     (update_contacts), which must also pass ``joins_afresh``, and stays marked (with the
-    terrain found now) if it does not."""
+    terrain found now) if it does not. Fills ``lookups`` (look_up_terrains) for the step's
+    update_contacts."""
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
@@ -160,8 +174,10 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
         if model.inv_mass[i] == 0.0:
             kind[i] = PINNED
         else:
-            t, phi, nx, ny, nz, v_n = closest_terrain(terrains, epsilon, model.terrain_offset[i],
-                                                      x, i, v[i, 0], v[i, 1], v[i, 2], h, True)
+            radius = model.terrain_offset[i]
+            look_up_terrains(terrains, radius, x, i, lookups)
+            t, phi, nx, ny, nz, v_n = closest_terrain(terrains, epsilon, radius, lookups, x, i,
+                                                      v[i, 0], v[i, 1], v[i, 2], h, True)
             if t >= 0 and released and not joins_afresh(phi, v_n, h, epsilon[t]):
                 terrain[i] = t   # still free, still marked as released
             elif t >= 0:
@@ -322,9 +338,9 @@ def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
 
 @kernel
 def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, surface,
-                    terrain, normal_floor, friction_damping, reaction):
+                    terrain, normal_floor, friction_damping, reaction, lookups):
     """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
-    solve. Adjusts ddv, the matrix and the right-hand side to every change. Returns whether
+    solve and the step's ``lookups`` (find_constraints). Adjusts ddv, the matrix and the right-hand side to every change. Returns whether
     another solve is needed: some contact came or went, or the friction impulses (summed over
     all contacts) moved by more than FRICTION_SETTLED of their total."""
     changed = 0
@@ -337,7 +353,7 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
                       v[i, 2] + dv[i, 2] + ddv[i, 2])   # the velocity at the end of the step
         if kind[i] == FREE:
             t, phi, nx, ny, nz, _ = closest_terrain(terrains, epsilon, model.terrain_offset[i],
-                                                    x, i, u0, u1, u2, h, False)
+                                                    lookups, x, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
                 make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,

@@ -111,6 +111,7 @@ class Workspace(NamedTuple):
     s: np.ndarray          # (P, 3): its search direction
     c: np.ndarray          # (P, 3): its preconditioned residual
     q: np.ndarray          # (P, 3): its products A s
+    lookups: np.ndarray    # (P, T, 4): each terrain's phi and normal at x (constraints.py)
 
 
 class Scratch(NamedTuple):
@@ -168,7 +169,7 @@ def find_step_contacts(model, state, solve_pairs, work, h, pairs):
     pairs in contact at x, the post-step list at x)."""
     x, v, memory = state
     find_constraints(model, x, v, h, memory.kind, work.normal, work.surface, memory.terrain,
-                     memory.normal_floor, memory.friction_damping)
+                     memory.normal_floor, memory.friction_damping, work.lookups)
     own, pairs = own_pairs_touching(model, x, pairs)
     contacts = find_solve_contacts(model, x, v, h, solve_pairs, own)
     return contacts, own, pairs
@@ -264,7 +265,8 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
         add_scaled(work.reaction, q, -1.0, rhs)
         terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
                                           normal, work.surface, memory.terrain, normal_floor,
-                                          memory.friction_damping, work.reaction)
+                                          memory.friction_damping, work.reaction,
+                                          work.lookups)
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
             break
@@ -379,14 +381,15 @@ def copy_state(out, state):
 # --- the driver ---------------------------------------------------------------------------------
 
 @kernel
-def workspace(layout, x):
-    """The arrays a step works in (Workspace)."""
+def workspace(layout, x, terrain_count):
+    """The arrays a step works in (Workspace), for a model of ``terrain_count`` terrains."""
     blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
     vectors = [np.zeros_like(x) for _ in range(13)]
     terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
     return Workspace(blocks, terms, vectors[0], force_columns(x), vectors[1], vectors[2],
                      vectors[3], vectors[4], vectors[5], vectors[6], vectors[7], vectors[8],
-                     vectors[9], vectors[10], vectors[11], vectors[12])
+                     vectors[9], vectors[10], vectors[11], vectors[12],
+                     np.empty((x.shape[0], terrain_count, 4)))
 
 
 @kernel
@@ -394,8 +397,9 @@ def advance(model, layout, settings, state, solve_pairs, statistics, h, steps, p
     """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
     done, first diverged particle or -1, the post-step pass's pair list: _steps.drive).
     ``solve_pairs`` is the solve's own surface pair list (a SolvePairList), changed in place."""
-    scratch = Scratch(layout, settings, workspace(layout, state.x), solve_pairs, statistics,
-                      saved_state(state), saved_state(state))
+    work = workspace(layout, state.x, model.terrain_epsilon.shape[0])
+    scratch = Scratch(layout, settings, work, solve_pairs, statistics, saved_state(state),
+                      saved_state(state))
     return drive(implicit_euler_step, model, state, scratch, h, steps, pairs)
 
 
