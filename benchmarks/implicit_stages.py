@@ -1,7 +1,7 @@
 """Where a backward Euler step's time goes: the stages of integrators/implicit_euler's step,
 called one by one from Python and timed, for a built-in scene after it has run a while.
 
-    .venv/bin/python benchmarks/implicit_stages.py cape --at 1.0 --steps 30
+    .venv/bin/python benchmarks/implicit_stages.py cape --at 1.0 --steps 30 [--tolerance 1e-3]
 
 Prints milliseconds a step for each stage (the conjugate-gradient solves, the contact updates
 between them, the start-of-step contact search, the pass after the step, ...), then the linear
@@ -126,13 +126,24 @@ def step(timer, model, scratch, state, start, h, done, pairs):
     return pairs, (at_start, log)
 
 
+def scene_of(arguments):
+    """The scene asked for, with the tolerance asked for."""
+    scene = springsim.load_scene(arguments.scene)
+    if arguments.tolerance is not None:
+        scene.implicit.cg_tolerance = arguments.tolerance
+    return scene
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scene", nargs="?", default="cape")
     parser.add_argument("--at", type=float, default=1.0, help="simulated seconds first (s)")
     parser.add_argument("--steps", type=int, default=30, help="steps timed")
+    parser.add_argument("--tolerance", type=float,
+                        help="the conjugate-gradient tolerance, instead of the scene's "
+                             "([implicit] cg_tolerance)")
     arguments = parser.parse_args()
-    simulation = springsim.Simulation(springsim.load_scene(arguments.scene))
+    simulation = springsim.Simulation(scene_of(arguments))
     if simulation.integrator.name != "implicit_euler":
         raise SystemExit(f"{arguments.scene} is not an implicit_euler scene")
     simulation.advance(arguments.at)
@@ -154,7 +165,7 @@ def main() -> None:
         pairs, log = step(timer, model, scratch, implicit, start, h, done, pairs)
         logs.append(log)
     wall = time.perf_counter() - began
-    same = springsim.Simulation(springsim.load_scene(arguments.scene))
+    same = springsim.Simulation(scene_of(arguments))
     same.advance(arguments.at)
     same.step(arguments.steps)
     if not (np.array_equal(same.positions, implicit.x)
@@ -162,8 +173,8 @@ def main() -> None:
             and np.array_equal(same.state.contacts.kind, implicit.memory.kind)):
         raise SystemExit("the stages did not take the simulation's own steps")
     steps = arguments.steps
-    print(f"{arguments.scene}, {steps} steps from {arguments.at:g} s: "
-          f"{wall / steps * 1e3:.1f} ms a step")
+    print(f"{arguments.scene}, {steps} steps from {arguments.at:g} s, conjugate-gradient "
+          f"tolerance {settings.tolerance:g}: {wall / steps * 1e3:.1f} ms a step")
     for name, seconds in sorted(timer.seconds.items(), key=lambda item: -item[1]):
         print(f"  {name:26s} {seconds / steps * 1e3:8.2f} ms a step")
     solves = np.mean([len(log) for _, log in logs])
