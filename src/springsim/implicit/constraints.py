@@ -340,9 +340,10 @@ def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
 def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, surface,
                     terrain, normal_floor, friction_damping, reaction, lookups):
     """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
-    solve and the step's ``lookups`` (find_constraints). Adjusts ddv, the matrix and the right-hand side to every change. Returns whether
-    another solve is needed: some contact came or went, or the friction impulses (summed over
-    all contacts) moved by more than FRICTION_SETTLED of their total."""
+    solve and the step's ``lookups`` (find_constraints). Adjusts ddv, the matrix and the
+    right-hand side to every change. Returns whether another solve is needed: some contact came
+    or went, or the friction impulses (summed over all contacts) moved by more than
+    FRICTION_SETTLED of their total."""
     changed = 0
     friction_total = friction_moved = 0.0
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
