@@ -25,6 +25,8 @@ from springsim import Simulation, load_scene
 from springsim.cli import main
 from springsim.recording import record, write_npz
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Blender
+
 TOLERANCE = 1e-4   # m: 0.1 mm
 
 if importlib.util.find_spec("bpy") is None:

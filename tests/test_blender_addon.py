@@ -23,6 +23,8 @@ import pytest
 
 from springsim.cli import main
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Blender
+
 HERE = Path(__file__).parent
 SOURCE = HERE.parent / "src"
 SAME = 1e-6          # m: Blender's take against springsim run's

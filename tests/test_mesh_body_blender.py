@@ -27,6 +27,8 @@ from springsim.scene import Scene
 from springsim.surfaces import body_surface
 from springsim.terrains import Plane
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Blender
+
 TOLERANCE = 1e-4   # m
 DATA = Path(__file__).with_name("data")
 

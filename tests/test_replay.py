@@ -137,6 +137,7 @@ def test_play_refuses_a_bad_speed_and_a_missing_file(take_path, capsys, tmp_path
     assert len(err) == 2 and "--speed = 0.0" in err[0] and "no such file" in err[1]
 
 
+@pytest.mark.external   # Xvfb
 def test_play_opens_a_window_under_a_virtual_display(take_path, tmp_path):
     from test_window_xvfb import window_screenshot
 

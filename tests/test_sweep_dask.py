@@ -16,6 +16,8 @@ from springsim.cli import main
 
 from test_sweep import SMALL_DROP, csv_without_timing, without_timing
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Dask
+
 DASK = str(Path(sys.executable).with_name("dask"))
 START_TIMEOUT = 60.0   # s for the scheduler and workers to come up
 

@@ -27,6 +27,8 @@ from springsim.export import load_take
 from springsim.export.geometry import body_pieces
 from test_replay import take_path  # noqa: F401  (the same recording: jelly-balls, 1 s at 20 fps)
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Chromium
+
 
 def free_port() -> int:
     with socket.socket() as probe:

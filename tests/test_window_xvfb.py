@@ -15,6 +15,8 @@ import pytest
 
 import imageio.v3 as iio
 
+pytestmark = pytest.mark.external   # the external tier (conftest.py): Xvfb
+
 WIDTH, HEIGHT = 800, 500
 
 
