@@ -86,11 +86,11 @@ def test_penetration_is_the_depth_of_the_deepest_particle_in_any_terrain():
     terrains = 'terrains=[{type="plane"}, {type="bowl", center=[0, 0, 0], radius=20}]'
     model = build_model(load_scene("jelly-plane", [SMALL_CUBE, terrains]))
     x = model.initial_positions.copy()
-    assert deepest_penetration(model, x) == 0.0
+    assert deepest_penetration(model, x, 0.0) == 0.0
     x[5] = (0.0, -1.25, 0.0)                       # 0.25 m below the plane y = -1
-    assert deepest_penetration(model, x) == pytest.approx(0.25)
+    assert deepest_penetration(model, x, 0.0) == pytest.approx(0.25)
     x[7] = (0.0, 0.0, 20.5)                        # 0.5 m outside the bowl of radius 20
-    assert deepest_penetration(model, x) == pytest.approx(0.5)
+    assert deepest_penetration(model, x, 0.0) == pytest.approx(0.5)
 
 
 def test_a_failed_write_leaves_the_old_file_whole_and_no_temporary_file(tmp_path):

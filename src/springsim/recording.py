@@ -14,7 +14,8 @@ from .energy import gravitational_energy, kinetic_energy, spring_energy
 from .recording_layout import LAYOUT_KEYS, layout_arrays
 from .safe_files import atomic_output
 from .sampling import frame_steps
-from .warmup import announced
+from .compile_notice import announced, kernels_of
+from .world import terrain_clearance
 
 
 
@@ -70,7 +71,7 @@ class Recording:
         self.kinetic_energy[frame] = kinetic_energy(model, v)
         self.gravitational_energy[frame] = gravitational_energy(model, x)
         self.spring_energy[frame] = spring_energy(model, x)
-        self.penetration[frame] = deepest_penetration(model, x)
+        self.penetration[frame] = deepest_penetration(model, x, simulation.time)
 
     def arrays(self) -> dict:
         """Everything, as the arrays an NPZ file holds (strings and numbers as 0-d arrays)."""
@@ -104,13 +105,13 @@ def record(simulation, duration: float, fps: float, progress: bool = False, on_f
     from tqdm import tqdm
 
     steps = frame_steps(duration, fps, simulation.dt, simulation.model.particle_count)
-    if start is None:
-        recording, first = Recording.empty(simulation, len(steps), fps), 1
-        recording.capture(0, simulation)
-    else:
-        recording, first = start
-    with announced(simulation.integrator.name, say=progress):
+    with announced(kernels_of(simulation), say=progress):
         simulation.step(0)  # compile (or load) the kernels now, so the timings are the simulation's
+        if start is None:   # a capture measures the penetration with a kernel of its own
+            recording, first = Recording.empty(simulation, len(steps), fps), 1
+            recording.capture(0, simulation)
+        else:
+            recording, first = start
     started = time.perf_counter() - recording.wall_seconds
     with tqdm(total=int(steps[-1]), initial=int(steps[first - 1]), unit="step",
               desc=simulation.scene.name, leave=False, file=sys.stderr,
@@ -147,12 +148,10 @@ def last_steps(seconds: float, dt: float) -> tuple[int, float]:
     return whole, (rest if rest > 1e-6 * dt else 0.0)
 
 
-def deepest_penetration(model, x: np.ndarray) -> float:
-    """How deep (m) the deepest particle lies inside any terrain; 0 when none is inside."""
-    depth = 0.0
-    for terrain in model.terrains:
-        depth = max(depth, -float(np.min(terrain.signed_distance(x, model.arrays.radius))))
-    return depth
+def deepest_penetration(model, x: np.ndarray, t: float) -> float:
+    """How deep (m) the deepest particle at ``x`` lies inside any terrain where that terrain
+    is at time ``t`` (s), moving and deforming ones included; 0 when none is inside."""
+    return max(0.0, -float(np.min(terrain_clearance(model, x, t), initial=np.inf)))
 
 
 def all_surfaces(model) -> np.ndarray:

@@ -9,7 +9,8 @@ sample (each SAMPLE_INTERVAL of simulated time, and at the end):
   the larger of the kinetic plus spring energy seen so far and the work to lift the bodies by
   their own height (m |g| times the height of their bounding box): a blow-up soon exceeds it,
   while explicit Euler's slow drift in free fall (m g^2 h t / 2) stays far below it;
-- no particle was deeper than its terrain's contact band epsilon inside a terrain.
+- no particle was deeper than its terrain's contact band epsilon inside a terrain (a moving or
+  deforming terrain where it is at the sample's time).
 
 The search starts at ``max_dt``; if that is stable it is the answer (the integrator is stable at
 every step asked about). Otherwise dt halves until a trial is stable (unstable trials usually end
@@ -26,6 +27,7 @@ import numpy as np
 
 from .errors import SimulationDiverged, require
 from .simulation import Simulation
+from .world import terrain_clearance
 
 SAMPLE_INTERVAL = 0.02   # s of simulated time between energy and penetration checks
 ENERGY_SLACK = 0.1       # allowed rise of the total energy, as a share of the energy scale
@@ -177,10 +179,8 @@ def lifting_work(model) -> float:
 
 def deepest_penetration(simulation) -> float:
     """How far (m) the deepest particle is inside any terrain beyond that terrain's contact band
-    (zero or less when none is)."""
-    x, radius = simulation.positions, simulation.model.arrays.radius
-    deepest = -np.inf
-    for terrain in simulation.model.terrains:
-        depth = -float(np.min(terrain.signed_distance(x, radius))) - terrain.epsilon
-        deepest = max(deepest, depth)
-    return deepest
+    (zero or less when none is), each terrain where it is at the simulation's time."""
+    model = simulation.model
+    clearance = terrain_clearance(model, simulation.positions, simulation.time)
+    epsilon = np.array([terrain.epsilon for terrain in model.terrains], float)
+    return float(np.max(-clearance - epsilon, initial=-np.inf))

@@ -231,6 +231,33 @@ def surface_velocity(terrains, t, x0, x1, x2):
 
 
 @kernel
+def terrain_clearances(model, x, radius, t, out):
+    """out[k]: the least signed distance (m) from any particle's surface (radius[i] from its
+    centre) to terrain k where it is at time t (s): the world moved to t as a step moves it
+    (``move_world``), then looked up as the contact kernels look it up (``terrain_at``). A
+    deforming terrain answers infinity beyond its reach (terrains/deforming_mesh.py)."""
+    move_world(model, t)
+    terrains = terrain_view(model)
+    for k in range(out.shape[0]):
+        least = np.inf
+        for i in range(x.shape[0]):
+            phi, _, _, _ = terrain_at(terrains, k, x[i, 0], x[i, 1], x[i, 2], radius[i])
+            least = min(least, phi)
+        out[k] = least
+
+
+def terrain_clearance(model, x: np.ndarray, t: float) -> np.ndarray:
+    """(T,) the least signed distance (m) from any particle's surface (its contact radius) to
+    each terrain of ``model`` where that terrain is at time ``t`` (s): negative for a
+    particle inside. The world is left at t, where the next step moves it from anyway."""
+    out = np.full(len(model.terrains), np.inf)
+    if len(out):   # a scene without terrains compiles nothing for it
+        terrain_clearances(model.arrays, np.ascontiguousarray(x, dtype=float),
+                           model.arrays.radius, float(t), out)
+    return out
+
+
+@kernel
 def pin_target(model, q):
     """Where moving pin q's path is now (the pose last moved to), and its velocity there."""
     p = model.motion_pose[model.pin_motion[q]]
