@@ -16,7 +16,9 @@ from springsim.collision.pair_lists import EDGES, POINTS
 from springsim.errors import SceneError
 from springsim.scene import Scene
 from springsim.state import solve_pair_list
-from springsim.terrains import Plane
+from springsim.motion import Motion
+from springsim.substeps import collider_substeps
+from springsim.terrains import Plane, Sphere
 
 INF, NAN = math.inf, math.nan
 
@@ -86,6 +88,31 @@ def test_body_values_are_checked_as_a_scene_file_checks_them(make, key):
 def test_terrain_values_are_checked_as_a_scene_file_checks_them(name, value):
     scene = Scene(bodies=[Cube()], terrains=[Plane(**{name: value})])
     refused(lambda: springsim.Simulation(scene), f"terrains.0.{name}")
+
+
+@pytest.mark.parametrize("make, key, says", [
+    (lambda: Scene(bodies=[Cube()], terrains=[Sphere(center=(3.0, 0.0, 0.0), motion=Motion(
+        keyframes=[{"time": 0.0}, {"time": 1.0, "position": (1.0, 0.0, 0.0)}]))]),
+     "terrains.0.motion.keyframes.0", "= {'time': 0.0}: must be a Keyframe object, not a dict"),
+    (lambda: Scene(bodies=[Cube()], terrains=[Plane(motion={"velocity": [1.0, 0.0, 0.0]})]),
+     "terrains.0.motion", "must be a Motion object, not a dict"),
+    (lambda: Scene(bodies=[Cube()], terrains=[{"type": "plane"}]), "terrains.0",
+     "must be a terrain object (Bowl, MeshTerrain, Plane, Sphere, tilted_plane), not a dict"),
+    (lambda: Scene(bodies=[Cube(pins=[{"particles": [0]}])]), "bodies.0.pins.0",
+     "must be a Pin object, not a dict"),
+])
+def test_a_dict_where_an_object_goes_is_refused_by_its_full_key(make, key, says):
+    """A table in a scene file becomes an object; in Python a dict there once converted
+    cleanly, then failed where its attributes were read (AttributeError)."""
+    assert says in refused(lambda: springsim.Simulation(make()), key)
+
+
+def test_a_motion_beyond_float64_in_one_step_is_refused_by_the_substeps():
+    """A motion the checks let through (each number within bounds) whose step is still beyond
+    float64 (a large dt): once an OverflowError in substeps.py."""
+    sphere = Sphere(center=(3.0, 0.0, 0.0), motion=Motion(velocity=(1e150, 0.0, 0.0)))
+    message = refused(lambda: collider_substeps([sphere], 1e10), "terrains.0.motion.velocity")
+    assert "further than float64 can measure in one step of dt = 1e+10 s" in message
 
 
 def test_the_same_value_is_refused_in_a_file_and_through_the_api(tmp_path):

@@ -14,6 +14,7 @@ import tempfile
 import tracemalloc
 import warnings
 
+import numpy as np
 import pytest
 
 from springsim import sizes
@@ -234,3 +235,140 @@ def test_a_fifo_a_device_a_folder_and_a_huge_file_are_refused_without_reading(ca
         line = refused(capsys, ["run", str(path)], "scene")
         assert says in line
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+
+
+# --- the moving world, point caches, pins, wind and mesh files: one line each, by the full key ---
+
+PLATE = ("v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n"
+         "f 1 4 3\nf 1 3 2\n")                       # a 2 m square, its normals up
+CLOTH = '[[bodies]]\ntype = "cloth"\nparticles_per_edge = 3\nposition = [0.0, 2.0, 0.0]\n'
+
+
+def write_pc2(path, frames):
+    from springsim.export.pc2 import encode
+
+    frames = np.asarray(frames, float)
+    with open(path, "wb") as file:
+        encode(file, frames, np.arange(len(frames)) / 24.0, 24.0, 0)
+
+
+def scene_file(folder, text, files=()):
+    """A scene file and the mesh files it names, in ``folder``; returns its path."""
+    for name, body in files:
+        (folder / name).write_text(body)
+    (folder / "bad.toml").write_text(text)
+    return str(folder / "bad.toml")
+
+
+MOVING_SPHERE = (CLOTH + '[[terrains]]\ntype = "sphere"\ncenter = [3.0, 0.0, 0.0]\n'
+                 'radius = 0.5\n[terrains.motion]\n')
+
+
+@pytest.mark.parametrize("text, files, key, says", [
+    # a motion whose lengths float64 cannot hold: once an OverflowError in substeps.py
+    (MOVING_SPHERE + "velocity = [1e300, 0.0, 0.0]\n", (), "terrains.0.motion.velocity",
+     "= (1e+300, 0.0, 0.0): must be three finite numbers, each within +-1e+150"),
+    (MOVING_SPHERE + "[[terrains.motion.keyframes]]\ntime = 0.0\n"
+                     "[[terrains.motion.keyframes]]\ntime = 1.0\nposition = [0.0, 1e300, 0.0]\n",
+     (), "terrains.0.motion.keyframes.1.position", "= (0.0, 1e+300, 0.0): must be three finite "
+                                                    "numbers (m), each within +-1e+150"),
+    # once blamed on the zero velocity
+    (MOVING_SPHERE + "angular_velocity = [0.0, 1.0, 0.0]\n[[terrains.motion.keyframes]]\n"
+                     "time = 0.0\n", (), "terrains.0.motion.angular_velocity",
+     "= (0.0, 1.0, 0.0): a motion is keyframes or a velocity and angular velocity, not both"),
+    # once a ValueError from NumPy's generator, after the model was built
+    (CLOTH + "[wind]\nvelocity = [1.0, 0.0, 0.0]\ngusts = {strength = 0.3, seed = -1}\n", (),
+     "wind.gusts.seed", "= -1: must be a whole number >= 0"),
+    # once a traceback from the faces' fans (-4 of 3 counted back to -1, the padding)
+    (CLOTH.replace("particles_per_edge = 3", 'file = "neg.obj"'),
+     [("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 -4\n")], "bodies.0.file",
+     "has a face naming a vertex it does not have (vertex -4, line 4; 3 are defined before "
+     "it: a face names vertices from 1, or -1 to -3 counting back from the last)"),
+    # once regrouped silently: six two-number lines read as four vertices
+    (CLOTH.replace("particles_per_edge = 3", 'file = "two.obj"'),
+     [("two.obj", "v 0 0\nv 1 0\nv 0 1\nv 1 1\nv 0 0\nv 1 1\nf 1 2 3\nf 1 3 4\n")],
+     "bodies.0.file", "has a vertex line that is not three numbers (line 1: 'v 0 0'); each "
+                      "vertex is 'v x y z'"),
+    # once accepted: trimesh's processing dropped the vertex that the cloth reader refuses
+    (CLOTH + '[[terrains]]\ntype = "mesh"\nfile = "nan.obj"\n',
+     [("nan.obj", PLATE.replace("v 1 0 1", "v 1 nan 1"))], "terrains.0.file",
+     "has vertices that are not finite numbers (1; the first is number 2)"),
+])
+def test_bad_moving_world_and_mesh_input_is_one_line_by_its_full_key(capsys, tmp_path, text,
+                                                                      files, key, says):
+    path = scene_file(tmp_path, text, files)
+    assert says in refused(capsys, ["run", path], key)
+    assert not (tmp_path / "bad.npz").exists()
+
+
+def pin_scene(tmp_path, pin, frames, vertices=None):
+    """A 3 x 3 cloth whose pin ``pin`` (TOML lines) follows or reads ``cache.pc2`` (``frames``,
+    samples of ``vertices``), above a plate deformed by the same cache."""
+    write_pc2(tmp_path / "cache.pc2", frames)
+    return scene_file(tmp_path, CLOTH + "[[bodies.pins]]\nparticles = [0]\n" + pin
+                      + '[[terrains]]\ntype = "mesh"\nfile = "plate.obj"\n'
+                        '[terrains.animation]\nfile = "cache.pc2"\n', [("plate.obj", PLATE)])
+
+
+def test_a_pin_cache_of_another_count_names_the_body_the_file_and_both_counts(capsys,
+                                                                               tmp_path):
+    """Once 'pins.0.animation.file = 24: points in the cache ...': no body, and a count for the
+    file."""
+    plate = np.loadtxt(PLATE.splitlines()[:4], usecols=(1, 2, 3))
+    path = pin_scene(tmp_path, '[bodies.pins.animation]\nfile = "cache.pc2"\n', [plate, plate])
+    line = refused(capsys, ["run", path], "bodies.0.pins.0.animation.file")
+    assert line.endswith(f"= '{tmp_path / 'cache.pc2'}': moves 4 points, but the body has 9 "
+                         "particles")
+
+
+def test_a_pin_riveted_to_a_cache_with_no_area_at_time_0_is_refused(capsys, tmp_path):
+    """The plate's first sample is folded flat onto a line (it unfolds later): no triangle has
+    a frame to rivet to. Once an IndexError from the nearest-triangle search."""
+    plate = np.loadtxt(PLATE.splitlines()[:4], usecols=(1, 2, 3))
+    flat = plate * [1.0, 1.0, 0.0]
+    path = pin_scene(tmp_path, 'follow = "terrains.0"\n', [flat, plate])
+    line = refused(capsys, ["run", path], "bodies.0.pins.0.follow")
+    assert line.endswith("= 'terrains.0': rivets each particle to its nearest triangle of "
+                         f"terrains.0, but no triangle of its point cache "
+                         f"({tmp_path / 'cache.pc2'}) has any "
+                         "area at time 0: follow a terrain whose surface has area then, or "
+                         "start its animation where it does")
+
+
+def test_a_nan_in_the_second_file_of_an_obj_sequence_names_that_file(capsys, tmp_path):
+    files = [("plate.obj", PLATE), ("walk_0001.obj", PLATE),
+             ("walk_0002.obj", PLATE.replace("v 1 0 1", "v 1 nan 1"))]
+    path = scene_file(tmp_path, CLOTH + '[[terrains]]\ntype = "mesh"\nfile = "plate.obj"\n'
+                                        '[terrains.animation]\nfile = "walk_####.obj"\n', files)
+    line = refused(capsys, ["run", path], "terrains.0.animation.file")
+    assert "walk_0002.obj': has vertices that are not finite numbers (1; the first is number " \
+           "2)" in line and "walk_0001" not in line
+
+
+def test_a_huge_mesh_file_is_measured_before_a_byte_is_read(capsys, tmp_path,
+                                                            machine_with_16_gb):
+    """5 GB of one line (sparse: nothing is really written): refused from its size against the
+    machine's memory, under the 64 MB that ``refused`` allows."""
+    with open(tmp_path / "huge.obj", "wb") as file:
+        file.truncate(5 * GB)
+    for text, key in ((CLOTH.replace("particles_per_edge = 3", 'file = "huge.obj"'),
+                       "bodies.0.file"),
+                      (CLOTH + '[[terrains]]\ntype = "mesh"\nfile = "huge.obj"\n',
+                       "terrains.0.file")):
+        line = refused(capsys, ["run", scene_file(tmp_path, text)], key)
+        assert line.endswith(f"= '{tmp_path / 'huge.obj'}': is 5,000,000,000 bytes; reading a "
+                             "mesh file that large takes about 100 GB, and this machine has 16 "
+                             "GB of memory")
+
+
+def test_a_mesh_file_of_one_huge_line_is_refused_at_its_first_megabyte(capsys, tmp_path,
+                                                                       monkeypatch):
+    """On a machine that could read it whole, a 200 MB line is still not an OBJ line: the
+    reader stops at the first megabyte."""
+    monkeypatch.setattr(sizes, "machine_memory", lambda: 10 ** 6 * GB)
+    with open(tmp_path / "line.obj", "wb") as file:
+        file.write(b"v 0 0 0 ")
+        file.truncate(200 * 2 ** 20)
+    text = CLOTH.replace("particles_per_edge = 3", 'file = "line.obj"')
+    line = refused(capsys, ["run", scene_file(tmp_path, text)], "bodies.0.file")
+    assert "has a line longer than 1,048,576 characters (line 1)" in line

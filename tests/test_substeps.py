@@ -84,7 +84,7 @@ def test_a_run_resumed_from_a_saved_state_is_the_run_that_went_on(tmp_path):
 def test_a_motion_too_fast_for_any_substeps_is_one_line_before_the_run():
     with pytest.raises(SceneError) as raised:
         springsim.Simulation(curtain_scene(1 / 60, speed=1e6))
-    assert raised.value.key == "terrains.0.motion" and "smaller dt" in str(raised.value)
+    assert raised.value.key == "terrains.0.motion.velocity" and "smaller dt" in str(raised.value)
     assert "\n" not in str(raised.value)
 
 

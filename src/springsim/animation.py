@@ -24,10 +24,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .errors import SceneError, is_finite, require
+from .meshfiles import READ_BYTES_PER_BYTE
+from .sizes import check_reading
 
 PC2_HEADER = np.dtype([("signature", "S12"), ("version", "<i4"), ("points", "<i4"),
                        ("start", "<f4"), ("rate", "<f4"), ("samples", "<i4")])
 MAX_CACHE_BYTES = 4 << 30   # a cache larger than this is refused before it is read
+BINARY_BYTES_PER_BYTE = 4   # reading a PC2 or MDD: its bytes, and its points as float64
 FRAME_TIMED = (".pc2", ".obj")   # the formats whose sample times count frames (of ``fps``)
 NUMBERED = re.compile(r"^(?P<head>.*?)(?P<number>#+|\d+)(?P<tail>\D*)$")
 
@@ -83,6 +86,9 @@ def read_point_cache(file: str, key: str) -> PointCache:
     size = sum(path.stat().st_size for path in files)
     require(size <= MAX_CACHE_BYTES, key, file,
             f"is {size:,} bytes; a point cache may have at most {MAX_CACHE_BYTES:,}")
+    text = files[0].suffix.lower() == ".obj"
+    check_reading(key, file, size, READ_BYTES_PER_BYTE if text else BINARY_BYTES_PER_BYTE,
+                  "an OBJ sequence" if text else "a point cache")
     return _read(tuple((str(path.resolve()), path.stat().st_mtime_ns, path.stat().st_size)
                        for path in files), key)
 
@@ -163,6 +169,10 @@ def obj_vertices(raw: bytes, key: str, path: str) -> np.ndarray:
         vertices = None
     require(vertices is not None and vertices.ndim == 2 and vertices.shape[1] == 3, key, path,
             "has a vertex line that is not at least three numbers ('v x y z')")
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    require(bad.size == 0, key, path,
+            f"has vertices that are not finite numbers ({bad.size}; the first is number "
+            f"{int(bad[:1].sum())}); fix or remove them")
     return vertices
 
 

@@ -12,8 +12,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .errors import SceneError, is_finite, require
+from .sizes import check_reading
 
 SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
+# Reading takes up to this many bytes of memory per byte of the file (traced: 13 for an OBJ of
+# short lines read here, 17 through trimesh, 12 for an STL), so a file is measured before it is
+# read; and no OBJ line may be longer than MAX_LINE (a face of 100,000 corners fits), so that a
+# file of one huge line is refused at its first megabyte.
+READ_BYTES_PER_BYTE = 20
+MAX_LINE = 1 << 20
 
 
 class TriangleMesh(NamedTuple):
@@ -23,13 +30,12 @@ class TriangleMesh(NamedTuple):
 
 
 def read_mesh(file: str, key: str) -> TriangleMesh:
-    """The mesh in ``file``; ``key`` names the setting in errors."""
-    require(isinstance(file, str) and file != "", key, file,
-            "must name a mesh file (" + ", ".join(SUFFIXES) + ")")
+    """The mesh in ``file``, its vertices merged (trimesh's processing); ``key`` names the
+    setting in errors. The file passes ``read_mesh_file``'s checks first, so that a terrain
+    refuses what a body or a cloth refuses (a vertex that is not a number, which trimesh's
+    processing would drop, a face naming a missing vertex, a file too big to read)."""
+    read_mesh_file(file, key)
     path = Path(file).expanduser()
-    require(path.is_file(), key, file, "no such file" + (
-        "" if path.is_absolute() else f" (relative to {Path.cwd()}; in a scene file a "
-        "relative path is relative to the scene file's folder)"))
     stat = path.stat()
     return _read(str(path.resolve()), stat.st_mtime_ns, stat.st_size, key)
 
@@ -150,6 +156,7 @@ def read_mesh_file(file: str, key: str) -> MeshFile:
         "" if path.is_absolute() else f" (relative to {Path.cwd()}; in a scene file a "
         "relative path is relative to the scene file's folder)"))
     stat = path.stat()
+    check_reading(key, file, stat.st_size, READ_BYTES_PER_BYTE, "a mesh file")
     try:
         return _read_file(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
     except SceneError as error:   # read once whatever key asks; the error names the asker's
@@ -169,7 +176,7 @@ def _read_file(path: str, mtime_ns: int, size: int, key: str = "file") -> MeshFi
     require(len(mesh.vertices) > 0, key, path, "holds no vertices")
     bad = np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))
     if bad.size:
-        raise SceneError(key, path, f"has {bad.size} vertices that are not finite numbers (the "
+        raise SceneError(key, path, f"has vertices that are not finite numbers ({bad.size}; the "
                                     f"first is number {int(bad[0])}); fix or remove them")
     require(len(mesh.faces) > 0, key, path, "holds no faces (triangles or polygons)")
     return mesh
@@ -177,42 +184,69 @@ def _read_file(path: str, mtime_ns: int, size: int, key: str = "file") -> MeshFi
 
 def _read_obj(path: str, key: str) -> MeshFile:
     """Wavefront OBJ: ``v`` lines, ``f`` lines of ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``
-    corners (negative numbers count back from the last vertex), ``g`` and ``o`` names."""
+    corners (negative numbers count back from the last vertex above the face), ``g`` and ``o``
+    names. Each line is checked as it is read, and a refusal names its line."""
     vertices, faces, groups, current = [], [], {}, []
-    try:
-        with open(path, encoding="utf-8", errors="replace") as file:
-            for number, line in enumerate(file, 1):
-                words = line.split()
-                if not words:
-                    continue
-                if words[0] == "v":
-                    vertices.append(words[1:4])
-                elif words[0] == "f":
-                    corners = [int(word.split("/", 1)[0]) for word in words[1:]]
-                    corners = [c - 1 if c > 0 else len(vertices) + c for c in corners]
-                    if len(corners) >= 3:
-                        faces.append(corners)
-                        for name in current:
-                            groups[name].append(corners)
-                elif words[0] in ("g", "o"):
-                    current = words[1:] or ["default"]
+    largest = (0, 0)   # the largest vertex number a face names, and its line
+    with open(path, encoding="utf-8", errors="replace") as file:
+        for number, line in enumerate(iter(lambda: file.readline(MAX_LINE + 1), ""), 1):
+            require(len(line) <= MAX_LINE, key, path,
+                    f"has a line longer than {MAX_LINE:,} characters (line {number}): it is not "
+                    "an OBJ file; give an OBJ, STL, PLY, OFF or GLB file")
+            words = line.split()
+            if not words:
+                continue
+            if words[0] == "v":
+                vertices.append(_vertex(words, number, key, path))
+            elif words[0] == "f":
+                corners = _corners(words, len(vertices), number, key, path)
+                largest = max(largest, (max(corners, default=0) + 1, number))
+                if len(corners) >= 3:
+                    faces.append(corners)
                     for name in current:
-                        groups.setdefault(name, [])
-    except (ValueError, IndexError) as error:
-        raise SceneError(key, path, f"is not an OBJ file this reader understands (line "
-                                    f"{number}: {error}); give an OBJ, STL, PLY, OFF or GLB "
-                                    "file") from None
-    try:
-        vertices = np.asarray(vertices, float).reshape(-1, 3)
-    except ValueError as error:
-        raise SceneError(key, path, f"has a vertex line with fewer than three numbers "
-                                    f"({error})") from None
+                        groups[name].append(corners)
+            elif words[0] in ("g", "o"):
+                current = words[1:] or ["default"]
+                for name in current:
+                    groups.setdefault(name, [])
+    require(largest[0] <= len(vertices), key, path,
+            f"has a face naming a vertex it does not have (vertex {largest[0]}, line "
+            f"{largest[1]}; the file has {len(vertices)})")
     padded = _padded(faces)
-    require(padded.size == 0 or (padded.min() >= -1 and padded.max() < len(vertices)), key, path,
-            f"has a face naming a vertex it does not have (it has {len(vertices)})")
     named = {name: np.unique(_padded(rows)[_padded(rows) >= 0]) for name, rows in groups.items()
              if rows}
-    return MeshFile(vertices, padded, named)
+    return MeshFile(np.asarray(vertices, float).reshape(-1, 3), padded, named)
+
+
+def _vertex(words: list, number: int, key: str, path: str) -> list:
+    """A ``v x y z [w]`` line's three numbers (a weight or colours after them are left out)."""
+    try:
+        xyz = [float(word) for word in words[1:4]]
+    except ValueError:
+        xyz = []
+    require(len(xyz) == 3, key, path,
+            f"has a vertex line that is not three numbers (line {number}: "
+            f"{' '.join(words)[:80]!r}); each vertex is 'v x y z'")
+    return xyz
+
+
+def _corners(words: list, above: int, number: int, key: str, path: str) -> list:
+    """An ``f`` line's vertices, numbered from 0: a number n >= 1 is the file's n-th vertex
+    (checked against the whole file once it is read), -n the n-th counting back from the last
+    of the ``above`` vertices defined before the line."""
+    try:
+        corners = [int(word.split("/", 1)[0]) for word in words[1:]]
+    except ValueError:
+        corners = None
+    require(corners is not None, key, path,
+            f"has a face line that is not vertex numbers (line {number}: "
+            f"{' '.join(words)[:80]!r}); give an OBJ, STL, PLY, OFF or GLB file")
+    for corner in corners:
+        require(corner >= 1 or -above <= corner <= -1, key, path,
+                f"has a face naming a vertex it does not have (vertex {corner}, line {number}; "
+                f"{above} are defined before it: a face names vertices from 1, or -1 to "
+                f"-{above} counting back from the last)")
+    return [c - 1 if c > 0 else above + c for c in corners]
 
 
 def _padded(faces: list) -> np.ndarray:

@@ -40,6 +40,9 @@ from .errors import SceneError, is_finite, require
 LINEAR, SMOOTH, VELOCITY = 0, 1, 2
 INTERPOLATIONS = {"linear": LINEAR, "smooth": SMOOTH}
 INFO = 12   # kind, first key, key count, pivot (3), velocity (3), angular velocity (3)
+# m, m/s, rad/s: a component larger than this has a square, and so a length or a distance, that
+# float64 cannot hold (the substeps, the contact and the poses all take lengths)
+MAX_COMPONENT = 1e150
 KEY = 7     # time, position (3), rotation vector (3)
 POSE = 21   # R (9, row by row), c (3), pivot (3), c' (3), w (3)
 
@@ -77,11 +80,14 @@ class Motion:
             value = getattr(self, name)
             if value is None and name == "pivot":
                 continue
-            require(np.shape(value) == (3,) and is_finite(value), f"{key}.{name}", value,
-                    "must be three finite numbers")
-        if self.keyframes and (any(self.velocity) or any(self.angular_velocity)):
-            raise SceneError(f"{key}.velocity", self.velocity,
-                             "a motion is keyframes or a velocity, not both")
+            require(is_vector(value), f"{key}.{name}", value,
+                    f"must be three finite numbers, each within +-{MAX_COMPONENT:g}")
+        for name in ("velocity", "angular_velocity"):   # blame the one given with keyframes
+            value = getattr(self, name)
+            if self.keyframes and any(value):
+                raise SceneError(f"{key}.{name}", value,
+                                 "a motion is keyframes or a velocity and angular velocity, "
+                                 "not both")
         previous = -math.inf
         for k, frame in enumerate(self.keyframes):
             here = f"{key}.keyframes.{k}"
@@ -90,8 +96,8 @@ class Motion:
                     f"keyframes must be in increasing time order, each later than the last "
                     f"({previous:g} s before it)")
             previous = frame.time
-            require(np.shape(frame.position) == (3,) and is_finite(frame.position),
-                    f"{here}.position", frame.position, "must be three finite numbers (m)")
+            require(is_vector(frame.position), f"{here}.position", frame.position,
+                    f"must be three finite numbers (m), each within +-{MAX_COMPONENT:g}")
             require(is_finite(frame.rotation_degrees), f"{here}.rotation_degrees",
                     frame.rotation_degrees, "must be a finite number")
             require(np.shape(frame.rotation_axis) == (3,) and is_finite(frame.rotation_axis)
@@ -124,6 +130,12 @@ class Motion:
         pose = self.pose(t, anchor)
         rotation = pose[:9].reshape(3, 3)
         return (np.asarray(points, float) - pose[12:15]) @ rotation.T + pose[9:12]
+
+
+def is_vector(value) -> bool:
+    """Three finite numbers whose lengths and differences float64 holds (MAX_COMPONENT)."""
+    return (np.shape(value) == (3,) and is_finite(value)
+            and bool(np.all(np.abs(np.asarray(value, float)) <= MAX_COMPONENT)))
 
 
 @dataclass

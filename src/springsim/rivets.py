@@ -14,8 +14,31 @@ chord between the frames of two samples).
 import numpy as np
 
 from .attachments import nearest_triangles
+from .bodies.pins import followed_terrain
+from .errors import require
 from .motion import Path
 from .terrains.deforming_mesh import DeformingSurface, surface_at
+
+
+def check_rivets(pins, terrains, key: str) -> None:
+    """Every pin that follows a deforming terrain has a triangle with area to be riveted to at
+    time 0 (``key``: the body's ``bodies.N.pins``)."""
+    for p, pin in enumerate(pins):
+        t = followed_terrain(pin)
+        if 0 <= t < len(terrains) and terrains[t].deforms():
+            surface = terrains[t].deforming_surface(f"terrains.{t}")
+            require(framed_triangles(surface).size > 0, f"{key}.{p}.follow", pin.follow,
+                    f"rivets each particle to its nearest triangle of terrains.{t}, but no "
+                    f"triangle of its point cache ({terrains[t].animation.file}) has any area "
+                    "at time 0: follow a terrain whose surface has area then, or start its "
+                    "animation where it does")
+
+
+def framed_triangles(surface: DeformingSurface) -> np.ndarray:
+    """The triangles with area at time 0 (a triangle with none has no frame to ride in)."""
+    corners = surface_at(surface, 0.0)[surface.triangles]
+    return np.flatnonzero(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                                  corners[:, 2] - corners[:, 0]), axis=1) > 0)
 
 
 def riveted_paths(surface: DeformingSurface, positions: np.ndarray) -> list:
@@ -23,8 +46,7 @@ def riveted_paths(surface: DeformingSurface, positions: np.ndarray) -> list:
     start to its rivet's place at each of the surface's sample times (and at time 0 itself, on
     its start, where that falls between two samples)."""
     corners = surface_at(surface, 0.0)[surface.triangles]
-    usable = np.flatnonzero(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
-                                                    corners[:, 2] - corners[:, 0]), axis=1) > 0)
+    usable = framed_triangles(surface)
     row, weights, _ = nearest_triangles(positions, corners[usable])
     row = usable[row]                      # a triangle with no area has no frame to ride in
     closest = np.einsum("nk,nkc->nc", weights, corners[row])

@@ -11,6 +11,7 @@ from .attachments import Attachment, validate_attachments
 from .collision.shapes.settings import SurfaceContact
 from .bodies.pins import check_follows
 from .errors import is_finite, require
+from .rivets import check_rivets
 from .sampling import check_duration
 from .scene_values import check_values
 from .sizes import check_scene_size
@@ -61,6 +62,7 @@ class Scene:
             terrain.validate(f"terrains.{t}")
         for i, body in enumerate(self.bodies):
             check_follows(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
+            check_rivets(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
         validate_attachments(self.attachments, len(self.bodies))
         self.validate_implicit_settings()
         if self.wind is not None:

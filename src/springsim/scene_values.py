@@ -213,7 +213,32 @@ def check_values(node, prefix: str = "") -> None:
             for i, item in enumerate(value):
                 check_values(item, f"{key}.{i}")
         elif value is not None or not _may_be_unset(type(node), field):
+            _require_objects(type(node), field, value, key)
             convert_field(type(node), field, _as_toml(value), MISSING, key)
+
+
+def _require_objects(owner: type, field: dataclasses.Field, value, key: str) -> None:
+    """In Python, a field that a scene file fills with tables holds objects (a Keyframe, a Pin,
+    a body): a dict there converts as a table would, and would then fail where its attributes
+    are read, so it is refused here with the class it should be."""
+    annotation = strip_optional(typing.get_type_hints(owner).get(field.name, typing.Any))
+    if field.metadata.get("typed_list"):
+        label, registry = TYPED_LISTS[field.name]
+        wanted, items = f"a {label} object (" + ", ".join(sorted(
+            {factory.__name__ for factory in registry.values()})) + ")", value
+    elif dataclasses.is_dataclass(annotation):
+        wanted, items = f"a {annotation.__name__} object", None
+    elif typing.get_origin(annotation) in (list, tuple) and typing.get_args(annotation) and \
+            dataclasses.is_dataclass(typing.get_args(annotation)[0]):
+        wanted, items = f"a {typing.get_args(annotation)[0].__name__} object", value
+    else:
+        return
+    listed = isinstance(items, (list, tuple))
+    for name, item in (enumerate(items) if listed else [(None, value)]):
+        require(dataclasses.is_dataclass(item) and not isinstance(item, type),
+                key if name is None else f"{key}.{name}", item,
+                f"must be {wanted}, not a {type(item).__name__}: in Python, build the object "
+                "(a scene file's tables are made into them)")
 
 
 def _as_toml(value):

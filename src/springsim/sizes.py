@@ -60,6 +60,17 @@ def check_scene_size(scene) -> None:
             f"makes {particles:,} particles; at most {MAX_PARTICLES:,} are possible")
 
 
+def check_reading(key: str, value, size: int, bytes_per_byte: float, what: str) -> None:
+    """Refuse a file of ``size`` bytes whose reading (``bytes_per_byte`` of memory per byte of
+    it, as traced for its reader) would take more than the model's share of the machine's
+    memory: measured before a byte is read, as a scene's size is before it is built."""
+    needed = bytes_per_byte * size
+    memory = machine_memory()
+    require(memory is None or needed <= MODEL_MEMORY_SHARE * memory, key, value,
+            f"is {size:,} bytes; reading {what} that large takes about {gigabytes(needed)}, and "
+            f"this machine has {gigabytes(memory or 0)} of memory")
+
+
 def _largest_body(scene) -> tuple[str, object]:
     """The key and value to blame: the size parameter of the body with the most particles."""
     sizes = [(getattr(body, "counts", lambda: (0, 0))()[0], b, body)

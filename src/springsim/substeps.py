@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .errors import require
+from .errors import SceneError
 
 SHARE = 0.4          # of its thickness, the most a collider moves in a substep
 MAX_SUBSTEPS = 1000  # more than this per step is refused: a smaller dt says what is meant
@@ -40,35 +40,70 @@ class ColliderSubsteps(NamedTuple):
 
 def collider_substeps(terrains, dt: float) -> ColliderSubsteps:
     """The substeps a step of ``dt`` needs for the moving ``terrains`` (module doc)."""
-    worst = ColliderSubsteps(1, -1, 0.0, math.inf)
+    worst, when = ColliderSubsteps(1, -1, 0.0, math.inf), 0.0
     for number, terrain in enumerate(terrains):
         if getattr(terrain, "motion", None) is None:
             continue
         thickness = terrain.thickness()   # a mesh's reads its file: only for moving ones
         if not math.isfinite(thickness):
             continue
-        travel = largest_travel(terrain, dt)
-        count = max(1, math.ceil(travel / (SHARE * thickness)))
+        travel, start = largest_travel(terrain, dt)
+        count = travel / (SHARE * thickness)   # inf where the travel is beyond float64
         if count > worst.count:
-            worst = ColliderSubsteps(count, number, travel, thickness)
-    require(worst.count <= MAX_SUBSTEPS, f"terrains.{worst.terrain}.motion",
-            f"{worst.travel:.3g} m a step",
-            f"moves {worst.count} times {SHARE:g} of its thickness ({worst.thickness:.3g} m) in "
-            f"one step of dt = {dt:g} s; at most {MAX_SUBSTEPS} substeps are taken: use a "
-            f"smaller dt (about {dt * MAX_SUBSTEPS / worst.count:.2g} s) or a slower motion")
-    return worst
+            worst, when = ColliderSubsteps(count, number, travel, thickness), start
+    if worst.count > MAX_SUBSTEPS:
+        name, value = blamed(terrains[worst.terrain].motion, when, dt, worst.travel)
+        moves = (f"moves the terrain {worst.travel:.3g} m in one step of dt = {dt:g} s: "
+                 f"{worst.count:.3g} substeps of {SHARE:g} of its thickness "
+                 f"({worst.thickness:.3g} m)" if math.isfinite(worst.travel) else
+                 f"moves the terrain further than float64 can measure in one step of dt = "
+                 f"{dt:g} s")
+        smaller = (f"a smaller dt (about {dt * MAX_SUBSTEPS / worst.count:.2g} s) or "
+                   if math.isfinite(worst.travel) else "")
+        raise SceneError(f"terrains.{worst.terrain}.motion.{name}", value,
+                         f"{moves}; at most {MAX_SUBSTEPS} substeps of {SHARE:g} of its "
+                         f"thickness are taken: use {smaller}a slower motion")
+    return worst._replace(count=math.ceil(worst.count))
 
 
-def largest_travel(terrain, dt: float) -> float:
-    """The farthest any of the terrain's probes moves in dt (m), over its motion's times."""
+def largest_travel(terrain, dt: float) -> tuple[float, float]:
+    """The farthest any of the terrain's probes moves in dt (m), over its motion's times, and
+    the step's start time when it does. inf where the motion moves it beyond what float64
+    holds (a velocity of 1e300 m/s)."""
     motion, anchor, probes = terrain.motion, terrain.anchor(), terrain.motion_probes()
+    travel, when = 0.0, 0.0
     if not len(probes):
-        return 0.0
-    travel = 0.0
+        return travel, when
     for t in sample_times(motion, dt):
-        moved = motion.place(probes, t + dt, anchor) - motion.place(probes, t, anchor)
-        travel = max(travel, float(np.linalg.norm(moved, axis=1).max()))
-    return travel
+        with np.errstate(over="ignore", invalid="ignore"):   # beyond float64: inf, refused
+            moved = motion.place(probes, t + dt, anchor) - motion.place(probes, t, anchor)
+            here = float(np.linalg.norm(moved, axis=1).max())
+        if not math.isfinite(here):
+            return math.inf, float(t)
+        if here > travel:
+            travel, when = here, float(t)
+    return travel, when
+
+
+def blamed(motion, start: float, dt: float, travel: float) -> tuple[str, object]:
+    """The motion's key and value that make its step from ``start`` (``travel`` m long) as long
+    as it is: a constant velocity, or its angular velocity where the velocity alone moves it
+    less than half as far; or the keyframe the step heads for (its position, or its rotation
+    where the position does not change)."""
+    if not motion.keyframes:
+        speed = float(np.max(np.abs(motion.velocity)))   # within sqrt(3) of |v|, no overflow
+        turning = float(np.max(np.abs(motion.angular_velocity)))
+        linear = speed >= turning if math.isinf(travel) else \
+            speed * dt >= 0.5 * travel / math.sqrt(3.0)
+        return ("velocity", motion.velocity) if linear else \
+            ("angular_velocity", motion.angular_velocity)
+    times = np.array([frame.time for frame in motion.keyframes], float)
+    k = int(np.clip(np.searchsorted(times, start + dt), 1, max(1, len(times) - 1)))
+    k = min(k, len(times) - 1)
+    frame, before = motion.keyframes[k], motion.keyframes[k - 1] if k > 0 else None
+    if before is None or tuple(frame.position) != tuple(before.position):
+        return f"keyframes.{k}.position", frame.position
+    return f"keyframes.{k}.rotation_degrees", frame.rotation_degrees
 
 
 def sample_times(motion, dt: float) -> np.ndarray:

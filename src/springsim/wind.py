@@ -93,6 +93,9 @@ class Wind:
                     f"{key}.gusts.strength", self.gusts.strength, "must be >= 0")
             require(is_finite(self.gusts.length) and self.gusts.length > 0,
                     f"{key}.gusts.length", self.gusts.length, "must be > 0 m")
+            seed = self.gusts.seed   # NumPy's generators take a whole number >= 0 alone
+            require(isinstance(seed, (int, np.integer)) and not isinstance(seed, bool)
+                    and seed >= 0, f"{key}.gusts.seed", seed, "must be a whole number >= 0")
 
 
 def quads_both_ways(triangles: np.ndarray):

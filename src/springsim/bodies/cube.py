@@ -88,6 +88,8 @@ class Cube(LatticeSprings, SurfaceContact):
             pin.validate(f"{key}.pins.{p}")
         if self.pins:
             pinned_mask(self.pins, self.build_positions(), {}, f"{key}.pins")
+            moving_pins(self.pins, self.build_positions(), {},
+                        particle_cache(self.particles_per_edge ** 3), f"{key}.pins")
 
     def surface_spacing(self) -> float:
         return self.edge_length / (self.particles_per_edge - 1)

@@ -11,8 +11,9 @@ file's own surface riding the lattice.
   box; a cell is kept when the surface passes through it (a conservative voxelization) or its
   centre is inside; the particles are the kept cells' corners, joined by the cube's spring
   pattern where both ends are particles. A 4 m box at spacing 4/9 is exactly the default cube.
-  ``spacing = "auto"`` picks the spacing (to three significant digits) whose lattice has about
-  ``particles`` particles, so a model in millimetres or kilometres makes the same body.
+  ``spacing = "auto"`` picks the spacing, a whole number of cells along the box's longest side,
+  whose lattice has about ``particles`` particles, so a model in millimetres or kilometres makes
+  the same body, and a box's lattice (a cube's) has its faces on lattice planes.
 - The surface (the idea of Newton's soft grid with a visual mesh and MuJoCo's trilinear
   flexcomp): each vertex of the FILE, in the file's order and seam duplicates included, is a
   fixed trilinear combination of the eight corners of the kept cell it lies in, computed once.
@@ -127,6 +128,7 @@ class MeshBody(LatticeSprings, SurfaceContact):
                     "choose them by particles = [...] or a region")
         if self.pins:
             pinned_mask(self.pins, self.lattice(key).positions, {}, f"{key}.pins")
+            moving_pins(self.pins, self.lattice(key).positions, {}, key=f"{key}.pins")
 
     def surface_spacing(self) -> float:
         return self.lattice().spacing
@@ -282,17 +284,22 @@ def build_lattice(mesh: TriangleMesh, solid: TriangleMesh, spacing, particles: i
 
 
 def auto_spacing(solid: TriangleMesh, particles: int):
-    """(spacing, filled lattice): the spacing, to three significant digits, whose lattice has
-    closest to ``particles`` particles among a few tries (AUTO_TRIES, stopping within
-    AUTO_TOLERANCE). The count goes as the volume over s^3 plus the surface over s^2: each try
-    follows the slope of log count over log spacing measured between the last two."""
+    """(spacing, filled lattice): the spacing whose lattice has closest to ``particles``
+    particles among a few tries (AUTO_TRIES, stopping within AUTO_TOLERANCE), each a whole
+    number of cells along the box's longest side. Why whole: the lattice is centred on the box,
+    so a side that is no whole number of cells sticks out by part of a cell at both ends, and
+    the body, which touches terrains with its particles, then rests that far above the floor (a
+    1 m cube at 0.0901 m stood 4 cm above it); a cube's every side fits. The count goes as the
+    volume over s^3 plus the surface over s^2: each try follows the slope of log count over log
+    spacing measured between the last two."""
     extent = np.ptp(solid.vertices, axis=0)
-    extent = np.maximum(extent, 1e-3 * extent.max())       # a flat mesh still has a box
+    longest = float(extent.max())
+    extent = np.maximum(extent, 1e-3 * longest)             # a flat mesh still has a box
     spacing = float(np.prod(extent) / particles) ** (1 / 3)
     tried = {}
     slope = -2.5
     for _ in range(AUTO_TRIES):
-        spacing = float(f"{spacing:.3g}")
+        spacing = longest / max(1, round(longest / spacing))
         if spacing in tried:
             break
         filled = fill(solid.vertices, solid.triangles, spacing)

@@ -158,9 +158,9 @@ def check_follows(pins, terrains, key: str) -> None:
 
 def particle_cache(count: int):
     """``cache_points`` for a body whose cache lists its ``count`` particles as they are."""
-    def cache_points(points: np.ndarray, key: str) -> np.ndarray:
-        require(points.shape[1] == count, f"{key}.file", points.shape[1],
-                f"points in the cache, but the body has {count} particles")
+    def cache_points(points: np.ndarray, key: str, file: str) -> np.ndarray:
+        require(points.shape[1] == count, f"{key}.file", file,
+                f"moves {points.shape[1]} points, but the body has {count} particles")
         return points
     return cache_points
 
@@ -174,24 +174,27 @@ class MovingPin(NamedTuple):
     paths: list | None = None
 
 
-def moving_pins(pins, positions: np.ndarray, groups: dict, cache_points=None) -> list:
+def moving_pins(pins, positions: np.ndarray, groups: dict, cache_points=None,
+                key: str = "pins") -> list:
     """A MovingPin for each pin that moves (a motion, a followed terrain or an animation) or
-    is soft (a spring to where it starts). ``cache_points(cache, key)`` places an animation's
-    samples (F, V, 3) as the body's particles (F, P, 3); a body without it takes none."""
+    is soft (a spring to where it starts). ``cache_points(cache, key, file)`` places an
+    animation's samples (F, V, 3) as the body's particles (F, P, 3); a body without it takes
+    none. A body's ``validate`` calls it with its own ``key`` (``bodies.N.pins``), so that a
+    cache that does not fit the body is refused by its full key before anything is built."""
     moving = []
     for p, pin in enumerate(pins):
         if pin.motion is None and not pin.follow and pin.stiffness is None and \
                 pin.animation is None:
             continue
-        chosen = chosen_particles(pin, positions, groups, "pins")
+        chosen = chosen_particles(pin, positions, groups, f"{key}.{p}")
         paths = None
         if pin.animation is not None:
-            key = f"pins.{p}.animation"
-            require(cache_points is not None, key, pin.animation.file,
+            here = f"{key}.{p}.animation"
+            require(cache_points is not None, here, pin.animation.file,
                     "moves the particles of a cloth or a cube; a mesh body's particles are "
                     "not its file's vertices (pin them with a motion or follow instead)")
-            cache = pin.animation.cache(f"{key}.file")
-            placed = cache_points(cache.points, key)[:, chosen]
+            cache = pin.animation.cache(f"{here}.file")
+            placed = cache_points(cache.points, here, pin.animation.file)[:, chosen]
             paths = [Path(times=cache.times, displacements=placed[:, j] - positions[i])
                      for j, i in enumerate(chosen)]
         moving.append(MovingPin(chosen, pin, paths))
