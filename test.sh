@@ -2,15 +2,18 @@
 # The test suite: set up the virtual environment (first time only), compile the kernels (first
 # time only), run pytest. Tiers (tests/conftest.py): the default tier runs every cheap oracle;
 # `--tier slow` the long scenarios, `--tier external` the tests in Blender, Chromium, Xvfb and
-# Dask, `--tier all` every tier (what CI runs). Other arguments go to pytest
-# (e.g. ./test.sh -k friction, ./test.sh --tier all -x).
+# Dask, `--tier all` every tier (what CI runs). The tests run on every core (pytest-xdist, -n auto;
+# `-n 0` runs them in one process). Other arguments go to pytest (e.g. ./test.sh -k friction,
+# ./test.sh --tier all -x).
 set -euo pipefail
 cd "$(dirname "$0")"
 tiers=default
+workers=(-n auto --dist loadfile)   # every core, a test file to a worker (its fixtures built once)
 previous=""
 for argument in "$@"; do
     case "$argument" in
         --tier=*) tiers=${argument#--tier=} ;;
+        -n|-n*|--numprocesses*|--dist*) workers=() ;;   # the caller chose
     esac
     [ "$previous" = "--tier" ] && tiers=$argument
     previous=$argument
@@ -27,11 +30,16 @@ if [[ "$tiers" == *external* ]]; then
             .venv/bin/pip install --progress-bar off -e ".[blender]"
     fi
 fi
-# every integrator's kernels compiled once before the tests (later: loaded from the cache in
-# seconds), so that no test's output holds the first-compile notice
+# the kernels the tests call, compiled once before them (later: loaded from the cache in
+# seconds), so that no test's output holds the first-compile notice: every integrator's serial
+# step and gradient tape, and for the slow tier explicit Euler's threaded step (test_threads.py;
+# the other threaded steps, minutes each, no test calls)
+threaded=$([[ "$tiers" == *slow* || "$tiers" == *all* ]] && echo explicit_euler || true)
 if ! .venv/bin/python -c "import sys; from springsim.warmup import is_warm; \
 from springsim.integrators import integrator_names; \
-sys.exit(0 if all(map(is_warm, integrator_names())) else 1)"; then
-    .venv/bin/springsim warmup
+sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_names()) \
+         and all(is_warm(name, ['threaded']) for name in sys.argv[1:]) else 1)" $threaded; then
+    .venv/bin/springsim warmup --variants serial keeping
+    [ -z "$threaded" ] || .venv/bin/springsim warmup --integrators $threaded --variants threaded
 fi
-exec .venv/bin/python -m pytest "$@"
+exec .venv/bin/python -m pytest "${workers[@]}" "$@"

@@ -1,10 +1,11 @@
 # Sourced by run.sh and test.sh from the repository root: creates .venv and installs springsim
 # with its test dependencies the first time, and again whenever pyproject.toml changes; the
-# first time, it also compiles the default integrator's kernels (`springsim warmup`). Each
-# stage says what it does before it starts, and while it runs no more than SETUP_TICK seconds
-# (4; the bar is a line within 5 s) pass without a line: pip's own lines pass through, and a
-# quiet stretch (a big download, installing the packages, compiling) gets
-# "setup: ... still VERB, N s".
+# first time, it also compiles the kernels a run of the default scene takes (`springsim warmup
+# --scene jelly-plane`: only those, so that ./run.sh shows its first result soon; test.sh
+# compiles every other variant). Each stage says what it does before it starts, and while it
+# runs no more than SETUP_TICK seconds (4; the bar is a line within 5 s) pass without a line:
+# pip's own lines pass through, and a quiet stretch (a big download, installing the packages,
+# compiling) gets "setup: ... still VERB, N s".
 SETUP_TICK=${SETUP_TICK:-4}
 
 # setup_stage VERB "what it does" command...: say what it does, run the command with its output
@@ -45,7 +46,7 @@ if [ ! -x .venv/bin/springsim ] || [ ! -x .venv/bin/pytest ] || [ pyproject.toml
     .venv/bin/pip install --progress-bar off -e ".[all,test]"
   touch .venv/.installed
   if [ "$first_time" = yes ]; then
-    setup_stage compiling "compiling the default integrator's kernels (springsim warmup; about 5 minutes on two cores, first run only)" \
-      .venv/bin/springsim warmup --integrators rk4
+    setup_stage compiling "compiling the kernels of the default scene (springsim warmup --scene jelly-plane; about 3 minutes on two cores, first run only)" \
+      .venv/bin/springsim warmup --scene jelly-plane
   fi
 fi

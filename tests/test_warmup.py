@@ -1,54 +1,42 @@
-"""The first compile is said before it happens (issue: the first run was silent for 100 s).
+"""A compile is said when it happens, wherever it happens (issues: the first run was silent for
+100 s; a threaded model for 15 minutes and the viewer's Start for 3.5, under a mark kept per
+integrator name).
 
-Oracles: with no mark in the cache folder, a run prints the notice on stderr before its first
-step and marks the integrator after it; with the mark, nothing; a terminal gets a spinner, a log
-none; `springsim warmup` compiles and marks each integrator asked for; scripts/ensure-venv.sh
-says what each stage does before it starts it (a fake python3 and pip record when they run),
-and that it still runs after every quiet SETUP_TICK seconds.
+Oracles: Numba's own compile, on a function Numba has not seen (a fresh function, or new
+argument types), is announced once with the notice and a kernel it has already compiled or
+cached is not; Numba's cache on disk, read by a fresh process, agrees with ``is_compiled``;
+`springsim warmup` makes every variant of an integrator (serial, threaded, the gradient's tape)
+compiled, so a threaded step afterwards compiles nothing; the viewer's controls compile a step
+on a thread, the window's message saying so, and step once it is done;
+scripts/ensure-venv.sh says what each stage does before it starts it (a fake python3 and pip
+record when they run), and that it still runs after every quiet SETUP_TICK seconds.
 """
 import io
 import os
 import stat
 import subprocess
+import sys
 import textwrap
+import time
 from pathlib import Path
 
+import numba
 import pytest
 
-from springsim import warmup
+from springsim import compile_notice, warmup
 from springsim.cli import main
+from springsim.integrators.base import KernelCall
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ["--set", "bodies.0.particles_per_edge=3", "--duration", "0.01"]
 
 
-@pytest.fixture
-def cold_cache(tmp_path, monkeypatch):
-    """A cache folder with no marks (the kernels themselves stay in Numba's real cache)."""
-    folder = tmp_path / "cache"
-    folder.mkdir()
-    monkeypatch.setattr(warmup, "cache_folder", lambda: folder)
-    return folder
+def fresh_kernel():
+    """A function Numba has never compiled: calling it compiles (not cached, so every time)."""
+    def add_one(x):
+        return x + 1
 
-
-def test_a_run_says_it_compiles_before_the_first_step_and_only_then(cold_cache, tmp_path,
-                                                                      capsys, monkeypatch):
-    from springsim.simulation import Simulation
-
-    step = Simulation.step
-    seen = []
-
-    def step_noting_stderr(self, count=1):
-        seen.append(capsys.readouterr().err)   # what was printed before this step
-        return step(self, count)
-
-    monkeypatch.setattr(Simulation, "step", step_noting_stderr)
-    assert main(["run", "jelly-plane", *SMALL, "--out", str(tmp_path / "a.npz")]) == 0
-    assert warmup.NOTICE.format(integrator="rk4") + "\n" == seen[0]
-    assert (cold_cache / "warm-rk4").exists()
-    seen.clear()
-    assert main(["run", "jelly-plane", *SMALL, "--out", str(tmp_path / "b.npz")]) == 0
-    assert "compiling" not in "".join(seen) + capsys.readouterr().err
+    return numba.njit(add_one)
 
 
 class Terminal(io.StringIO):
@@ -56,25 +44,162 @@ class Terminal(io.StringIO):
         return True
 
 
-def test_a_terminal_gets_a_spinner_and_a_log_none(cold_cache, monkeypatch):
-    monkeypatch.setattr(warmup, "SPIN_EVERY", 0.01)
-    terminal, log = Terminal(), io.StringIO()
-    with warmup.announced("midpoint", terminal):
-        import time
+def test_a_compile_is_announced_once_and_a_compiled_kernel_not_at_all():
+    kernel, log = fresh_kernel(), io.StringIO()
+    with compile_notice.announced("the test's kernels", log) as announcer:
+        assert kernel(1.0) == 2.0
+        assert kernel(2.0) == 3.0       # compiled: no second compile
+        fresh_kernel()(1)               # another compile in the block: no second notice
+    assert log.getvalue() == compile_notice.NOTICE.format(what="the test's kernels") + "\n"
+    assert announcer.compiled
+    log = io.StringIO()
+    with compile_notice.announced("the test's kernels", log) as announcer:
+        kernel(5.0)
+    assert log.getvalue() == "" and not announcer.compiled
+
+
+def test_new_argument_types_are_a_new_compile_and_announced():
+    """What compiles is a kernel for types, not a name: the same kernel with an int compiles
+    again (as a threaded model's kernel did, under an integrator already marked warm)."""
+    kernel, log = fresh_kernel(), io.StringIO()
+    kernel(1.0)
+    assert warmup.is_compiled(KernelCall(kernel, (1.0,)))
+    assert not warmup.is_compiled(KernelCall(kernel, (1,)))
+    with compile_notice.announced("the int kernels", log):
+        kernel(1)
+    assert log.getvalue() == compile_notice.NOTICE.format(what="the int kernels") + "\n"
+    assert warmup.is_compiled(KernelCall(kernel, (1,)))
+
+
+def test_a_terminal_gets_a_ticker_while_compiling_and_a_log_none(monkeypatch):
+    monkeypatch.setattr(compile_notice, "SPIN_EVERY", 0.01)
+    terminal = Terminal()
+    with compile_notice.announced("the test's kernels", terminal) as announcer:
+        announcer.depth += 1            # a compile under way, as Numba's event says
+        announcer.compile_started()
         time.sleep(0.1)
-    assert "\r| compiling, 0 s" in terminal.getvalue()
-    (cold_cache / "warm-midpoint").unlink()
-    with warmup.announced("midpoint", log):
-        time.sleep(0.05)
-    assert log.getvalue() == warmup.NOTICE.format(integrator="midpoint") + "\n"
+        announcer.depth -= 1
+    shown = terminal.getvalue()
+    assert shown.startswith(compile_notice.NOTICE.format(what="the test's kernels") + "\n")
+    assert "\r| compiling, 0 s" in shown and shown.endswith("\r")
 
 
-def test_warmup_compiles_and_marks_each_integrator(cold_cache, capsys):
-    assert main(["warmup", "--integrators", "rk4"]) == 0
+def test_an_inner_block_names_what_compiles_and_the_outer_says_it_once():
+    log = io.StringIO()
+    with compile_notice.announced("the kernels `springsim run` needs", log):
+        with compile_notice.announced("the rk4 kernels (threaded)"):
+            fresh_kernel()(1.0)
+        fresh_kernel()(1.0)
+    assert log.getvalue() == compile_notice.NOTICE.format(what="the rk4 kernels (threaded)") + "\n"
+
+
+def test_another_threads_compile_is_not_this_blocks():
+    import threading
+
+    log = io.StringIO()
+    with compile_notice.announced("the test's kernels", log):
+        other = threading.Thread(target=fresh_kernel(), args=(1.0,))
+        other.start()
+        other.join()
+    assert log.getvalue() == ""
+
+
+def test_is_compiled_reads_numbas_cache_on_disk(tmp_path):
+    """A fresh process sees a kernel cached by another as compiled for the types it was called
+    with and for no other, without compiling it; a process that compiles it agrees."""
+    (tmp_path / "cached_kernel.py").write_text(textwrap.dedent("""\
+        from numba import njit
+
+        @njit(cache=True)
+        def double(x):
+            return 2 * x
+        """))
+    probe = textwrap.dedent("""\
+        import sys
+        from cached_kernel import double
+        from springsim.integrators.base import KernelCall
+        from springsim.warmup import is_compiled
+        print(is_compiled(KernelCall(double, (1.0,))), is_compiled(KernelCall(double, (1,))))
+        if sys.argv[1:] == ["call"]:
+            double(1.0)
+        """)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path]),
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run(*args):
+        done = subprocess.run([sys.executable, "-c", probe, *args], env=env, cwd=tmp_path,
+                              capture_output=True, text=True, check=True)
+        return done.stdout.split()
+
+    assert run("call") == ["False", "False"]
+    assert run() == ["True", "False"]
+
+
+def test_warmup_lists_every_variant_of_each_method():
+    """The threaded kernel and the gradient's are compiled by warmup, not only the serial."""
+    from springsim.integrators import rk4
+
+    calls = warmup.variant_calls("rk4")
+    kernels = {label.split()[1]: call.kernel for label, call in calls.items()}
+    assert kernels == {"serial": rk4.advance, "threaded": rk4.parallel_advance,
+                       "keeping": rk4.advance_keeping}
+    assert {label.split()[1] for label in warmup.variant_calls("implicit_euler")} == {"serial"}
+
+
+@pytest.mark.slow   # explicit Euler's threaded step: minutes to compile where it is not cached
+def test_warmup_compiles_the_threaded_variant_so_a_threaded_step_compiles_nothing(capsys):
+    """After `springsim warmup --variants threaded` (test.sh runs it first for the slow tier:
+    then this loads the cache), the threaded variant is compiled, and a threaded step announces
+    nothing."""
+    from springsim.scenefile import load_scene
+    from springsim.simulation import Simulation
+
+    assert main(["warmup", "--integrators", "explicit_euler", "--variants", "threaded"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("springsim warmup: compiling the kernels of 1 integrator once")
-    assert out[1].split()[0] == "rk4" and out[1].endswith(" s")
-    assert [path.name for path in cold_cache.iterdir()] == ["warm-rk4"]
+    assert out[0].startswith("springsim warmup: compiling the threaded variant of the kernels "
+                             "of 1 integrator once")
+    assert out[1].split()[0] == "explicit_euler" and out[1].endswith(" s")
+    assert warmup.is_warm("explicit_euler", ["threaded"])
+    simulation = Simulation(load_scene("jelly-plane", ["bodies.0.particles_per_edge=3"]),
+                            integrator="explicit_euler")
+    call = simulation.integrator.kernel_call(simulation.model, simulation.state,
+                                             simulation.dt, 0, threaded=True)
+    log = io.StringIO()
+    with compile_notice.announced("the threaded kernels", log) as announcer:
+        call.kernel(*call.arguments)
+    assert not announcer.compiled and log.getvalue() == ""
+
+
+def test_warmup_refuses_an_unknown_variant_in_one_line(capsys):
+    assert main(["warmup", "--variants", "fast"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["springsim warmup: --variants = 'fast': must be one of serial, threaded, "
+                   "keeping"]
+
+
+def test_a_run_says_it_compiles_before_the_first_step(tmp_path, capsys, monkeypatch):
+    """The run's first step, its kernel not compiled for these types, is said before it."""
+    from springsim.integrators import base
+
+    kernel_call = base.KernelIntegrator.kernel_call
+    seen = []
+
+    def call_compiling(self, model, state, dt, steps, threaded=None):
+        call = kernel_call(self, model, state, dt, steps, threaded)
+        fresh = fresh_kernel()
+
+        def compiling(*arguments):
+            fresh(1.0)   # a compile, as a new variant's first call
+            return call.kernel(*arguments)
+
+        seen.append(capsys.readouterr().err)
+        return KernelCall(compiling, call.arguments)
+
+    monkeypatch.setattr(base.KernelIntegrator, "kernel_call", call_compiling)
+    assert main(["run", "jelly-plane", *SMALL, "--out", str(tmp_path / "a.npz")]) == 0
+    err = "".join(seen) + capsys.readouterr().err
+    assert compile_notice.NOTICE.format(what="the rk4 kernels") + "\n" in err
+    assert err.count("springsim: compiling") == 1
 
 
 def test_warmup_refuses_an_unknown_integrator_in_one_line(capsys):
@@ -82,6 +207,45 @@ def test_warmup_refuses_an_unknown_integrator_in_one_line(capsys):
     err = capsys.readouterr().err
     assert err.startswith("springsim warmup: --integrators = 'rk5': must be one of ")
     assert len(err.splitlines()) == 1
+
+
+def test_the_viewer_compiles_on_a_thread_and_says_so_in_its_window(monkeypatch, capsys):
+    """While the step's kernel compiles, frames take no steps and the window's message is the
+    notice with the seconds; then the steps go on and the message is gone."""
+    from springsim.bodies.cube import Cube
+    from springsim.scene import Scene
+    from springsim.viewer import controls as viewer_controls
+
+    kernel = fresh_kernel()
+    compiles = []
+    real_compile = kernel.compile
+
+    def compile_slowly(types):
+        compiles.append(types)
+        time.sleep(0.3)
+        return real_compile(types)
+
+    monkeypatch.setattr(kernel, "compile", compile_slowly)
+    monkeypatch.setattr(viewer_controls, "step_call", lambda sim: KernelCall(kernel, (1.0,)))
+    scene = Scene(name="small", bodies=[Cube(particles_per_edge=3)], terrains=[], dt=1e-3)
+    controls = viewer_controls.Controls(scene)
+    controls.compile_in_background = True   # as the window sets it
+    stepped = []
+    controls.sim.step = stepped.append   # the steps themselves are not what is tested here
+    controls.start()
+    controls.advance_frame(now=0.0)
+    assert stepped == []
+    assert controls.compiling is not None
+    deadline = time.monotonic() + 30
+    while controls.compiling is not None and controls.compiling.thread.is_alive():
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    notice = compile_notice.NOTICE.format(what=compile_notice.kernels_of(controls.sim))
+    assert controls.message.startswith(notice + ": ") and controls.message.endswith(" s")
+    assert notice + "\n" in capsys.readouterr().err
+    controls.advance_frame(now=0.1)
+    assert stepped == [controls.steps_per_frame]
+    assert controls.message == "" and len(compiles) == 1
 
 
 def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
@@ -125,4 +289,4 @@ def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
     for index, line in enumerate(lines):
         if line.startswith("RAN"):
             assert lines[index - 1].startswith("setup: "), lines
-    assert "RAN springsim warmup --integrators rk4" in lines
+    assert "RAN springsim warmup --scene jelly-plane" in lines

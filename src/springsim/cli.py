@@ -59,8 +59,12 @@ def main(argv=None) -> int:
             from .errors import OutputFailed, SceneError, SimulationDiverged
 
             args = build_parser().parse_args(argv)
+            from .compile_notice import announced   # every compile a command makes is said
+
             try:
-                with quiet_overflow(), one_line_warnings(args.command):
+                with quiet_overflow(), one_line_warnings(args.command), \
+                        announced(f"the kernels `springsim {args.command}` needs",
+                                  say=not getattr(args, "quiet", False)):
                     return args.handler(args)
             except (SceneError, SimulationDiverged, OutputFailed) as error:
                 print(f"springsim {args.command}: {error}", file=sys.stderr)

@@ -230,9 +230,10 @@ def warm_kernels(scenes) -> None:
     Errors are left to the runs themselves, which report them.
     """
     from .simulation import Simulation
-    from .warmup import announced
+    from .compile_notice import announced, kernels_of
 
     for scene in scenes:
-        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError), \
-                announced(scene.integrator):
-            Simulation(copy.deepcopy(scene)).step(1)
+        with contextlib.suppress(SceneError, SimulationDiverged, ValueError, ArithmeticError):
+            simulation = Simulation(copy.deepcopy(scene))
+            with announced(kernels_of(simulation)):
+                simulation.step(1)

@@ -4,6 +4,7 @@ Every public method checks its arguments and the state's arrays before any compi
 misuse is a one-line SceneError naming the argument, never a Numba typing error or a write past
 the end of an array.
 """
+import contextlib
 import copy
 import math
 import numbers
@@ -73,15 +74,16 @@ class Simulation:
             scene.dt = dt
         scene.validate()
         self.scene = scene
-        self.model = build_model(scene)
+        self.dt = float(scene.dt)
+        self._substeps = {}               # dt -> ColliderSubsteps
+        self.substeps()                   # a motion too fast for any substeps fails here,
+        self.model = build_model(scene)   # before anything is built
         check_bodies_outside_terrains(self.model)
         self._integrator_options = integrator_settings(scene, integrator_options)
         self.integrator = get_integrator(scene.integrator, **self._integrator_options)
-        self.dt = float(scene.dt)
         self.state = State.initial(self.model)
-        self._substeps = {}               # dt -> ColliderSubsteps
-        self.substeps()                   # a motion too fast for any substeps fails here
         self._lists_left = (None, None)   # the pair lists the last step left (State.check)
+        self._called = set()   # the kinds of compiled call made ("step", "keeping")
 
     @property
     def steps_taken(self) -> int:
@@ -145,7 +147,7 @@ class Simulation:
         parts = self.substeps(dt).count
         step = dt / parts   # the step the integrator takes (dt itself without substeps)
         # Ctrl-C and SIGTERM wait for the compiled call to return and the state to be whole
-        with signals.deferred():
+        with signals.deferred(), self._first_call_said("keeping" if tape else "step"):
             if tape is None:
                 done, particle = self.integrator.advance(self.model, self.state, step,
                                                          count * parts, self.threads)
@@ -163,6 +165,17 @@ class Simulation:
                 time=self.state.time, step=self.steps_taken, integrator=self.integrator.name,
                 dt=step, particle=particle, position=self.state.positions[particle],
                 speed_squared=speed_squared, suggested_dt=self._step_to_try(step))
+
+    def _first_call_said(self, kind: str):
+        """Around the first compiled call of each kind: a compile it makes is said on stderr
+        (compile_notice.announced; from Python too, not only the command line). Later calls pay
+        nothing for it."""
+        if kind in self._called:
+            return contextlib.nullcontext()
+        from .compile_notice import announced, kernels_of
+
+        self._called.add(kind)
+        return announced(kernels_of(self))
 
     def _step_to_try(self, dt: float) -> float:
         """A step to suggest after a divergence: half this one, or less where the stiffest

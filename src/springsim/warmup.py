@@ -1,25 +1,14 @@
-"""The kernels' first compile: said before it happens, and done ahead of time by `springsim warmup`.
+"""The kernels' first compile done ahead of time (`springsim warmup`), and whether it is done.
 
-Numba compiles an integrator's kernels at their first call (about two minutes for the first
-integrator on a laptop, less for each next one, which shares the force and contact kernels) and
-caches them on disk (``springsim._jit``); later runs load them in a second or two. A first run
-that says nothing for two minutes looks hung, so the first step of each integrator is announced
-on stderr while no mark says its kernels are in this cache, with a spinner where stderr is a
-terminal. The mark (an empty file ``warm-<integrator>`` in the cache folder) is written after
-that step, so a compile stopped by Ctrl-C is announced again next time.
+What compiles is a kernel for its arguments' types, not an integrator: the serial step, the
+threaded one (models of 131,072 particles and more), the one that keeps the gradient's tape are
+three compiles of one method (``Integrator.variants``), and a new type of argument is another.
+``is_compiled`` asks Numba's cache index whether a kernel is there for given arguments, without
+compiling or loading it; ``is_warm`` whether every variant `springsim warmup` compiles for an
+integrator is. A compile that does happen is said when it starts (compile_notice.py).
 """
-import contextlib
-import itertools
 import os
-import sys
-import threading
-import time
 from pathlib import Path
-
-NOTICE = ("springsim: compiling the {integrator} kernels once (minutes: about 5 on two "
-          "cores; later runs start in seconds)")
-SPIN_EVERY = 0.1   # s between spinner frames
-SPINNER = "|/-\\"
 
 
 def cache_folder() -> Path:
@@ -30,52 +19,48 @@ def cache_folder() -> Path:
     return Path(os.environ.get("NUMBA_CACHE_DIR") or numba.config.CACHE_DIR)
 
 
-def mark(integrator: str) -> Path:
-    return cache_folder() / f"warm-{integrator}"
+def is_compiled(call) -> bool:
+    """Whether ``call``'s kernel (an integrators.KernelCall) is compiled for its arguments'
+    types: in this process, or in the cache on disk (then loading it takes a second)."""
+    kernel = call.kernel
+    types = tuple(kernel.typeof_pyval(argument) for argument in call.arguments)
+    if types in kernel.overloads:
+        return True
+    try:   # Numba's cache index, as its own load_overload reads it
+        cache = kernel._cache
+        key = cache._index_key(types, kernel.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except (AttributeError, OSError, EOFError, ValueError):
+        return False   # a cache this Numba lays out otherwise: not known to be compiled
 
 
-def is_warm(integrator: str) -> bool:
-    return mark(integrator).exists()
+def variant_calls(integrator: str, variants=None) -> dict:
+    """{label: KernelCall} of every variant `springsim warmup` compiles for ``integrator``: each
+    of its variants (Integrator.variants), or those named in ``variants``, on each of
+    WARMUP_SCENES."""
+    from .simulation import Simulation
+
+    calls = {}
+    for scene in warmup_scenes():
+        simulation = Simulation(scene, integrator=integrator, threads=1)
+        found = simulation.integrator.variants(simulation.model, simulation.state,
+                                               simulation.dt)
+        for variant, call in found.items():
+            if variants is None or variant in variants:
+                calls[f"{integrator} {variant} ({scene.name})"] = call
+    return calls
 
 
-@contextlib.contextmanager
-def announced(integrator: str, stream=None, say: bool = True):
-    """Around a simulation's first step: say that the kernels compile when no mark says they
-    are cached (and spin while they do, where ``stream`` is a terminal); mark them after."""
-    stream = stream or sys.stderr
-    if is_warm(integrator):
-        yield
-        return
-    if say:
-        print(NOTICE.format(integrator=integrator), file=stream, flush=True)
-    stop = threading.Event()
-    spinner = None
-    if say and _is_terminal(stream):
-        spinner = threading.Thread(target=_spin, args=(stream, stop), daemon=True)
-        spinner.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        if spinner is not None:
-            spinner.join()
-    with contextlib.suppress(OSError):   # an unwritable cache: announced again next time
-        mark(integrator).touch()
+def warmup_scenes() -> list:
+    """Small models of a jelly cube on the plane and a cloth on balls: between them, every
+    kind of body, terrain and contact the step kernels are compiled for."""
+    from .scenefile import load_scene
+
+    return [load_scene("jelly-plane", ["bodies.0.particles_per_edge=3"]),
+            load_scene("cloth-balls", ["bodies.0.particles_per_edge=4"])]
 
 
-def _is_terminal(stream) -> bool:
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):
-        return False
-
-
-def _spin(stream, stop: threading.Event) -> None:
-    started = time.monotonic()
-    for frame in itertools.cycle(SPINNER):
-        if stop.wait(SPIN_EVERY):
-            break
-        stream.write(f"\r{frame} compiling, {time.monotonic() - started:.0f} s ")
-        stream.flush()
-    stream.write("\r" + " " * 24 + "\r")
-    stream.flush()
+def is_warm(integrator: str, variants=None) -> bool:
+    """Whether every variant `springsim warmup` compiles for ``integrator`` (or those named in
+    ``variants``) is in the cache."""
+    return all(map(is_compiled, variant_calls(integrator, variants).values()))

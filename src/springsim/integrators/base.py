@@ -4,12 +4,24 @@ Adding an integrator is one new file in this package that defines an ``Integrato
 decorated with ``@register``, plus its import line in ``__init__.py``. The registry lives here,
 not in the package's ``__init__``, so that a method's file imports nothing that imports it back.
 """
+from typing import NamedTuple
+
 import numba
+import numpy as np
 
 from ..errors import SceneError
 from ..spring_runs import partition_count
 
 REGISTRY: dict[str, type] = {}
+
+
+class KernelCall(NamedTuple):
+    """A compiled kernel and the arguments a step calls it with. What Numba compiles (and
+    caches) is the kernel for these arguments' types: a new kernel or new types compile anew
+    (warmup.is_compiled asks the cache)."""
+
+    kernel: object       # a Numba dispatcher
+    arguments: tuple
 
 
 class Integrator:
@@ -35,6 +47,12 @@ class Integrator:
 
     def advance(self, model, state, dt: float, steps: int, threads: int = 1) -> tuple[int, int]:
         raise NotImplementedError  # every registered integrator overrides this
+
+    def variants(self, model, state, dt: float) -> dict[str, KernelCall]:
+        """Every compiled call a simulation of ``model`` with this integrator can make, by a
+        short name (``serial``, ``threaded``, ``keeping``): what `springsim warmup` compiles
+        and ``warmup.is_warm`` checks; none for a method that is not one compiled call."""
+        return {}
 
     def model_cache(self, model) -> dict:
         """What this integrator derives from ``model`` and keeps between calls (a solve's
@@ -74,19 +92,41 @@ class KernelIntegrator(Integrator):
         """``advance`` (where ``keeps_stages``) of len(kept) steps, keeping each one's start
         and stages' accelerations."""
         model.arrays.clock[0] = state.time
-        done, particle, state.pairs = self.keeping_kernel(
-            model.arrays, state.positions, state.velocities, float(dt), len(kept), state.pairs,
-            kept, starts)
+        call = self.keeping_call(model, state, dt, kept, starts)
+        done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
 
+    def kernel_call(self, model, state, dt, steps, threaded=None) -> KernelCall:
+        """The call ``advance`` makes: ``parallel_kernel`` where ``threaded`` (by default, where
+        the model's size asks for it), else ``kernel``."""
+        if threaded is None:
+            threaded = partition_count(model.particle_count) > 1
+        return KernelCall(self.parallel_kernel if threaded else self.kernel,
+                          (model.arrays, state.positions, state.velocities, float(dt),
+                           int(steps), state.pairs))
+
+    def keeping_call(self, model, state, dt, kept, starts) -> KernelCall:
+        return KernelCall(self.keeping_kernel,
+                          (model.arrays, state.positions, state.velocities, float(dt),
+                           len(kept), state.pairs, kept, starts))
+
+    def variants(self, model, state, dt):
+        calls = {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
+                 "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
+        if self.keeping_kernel is not None:
+            # the tape's arrays for one step (gradients/tape.py), empty: only their types count
+            particles = state.positions.shape[0]
+            calls["keeping"] = self.keeping_call(model, state, dt,
+                                                 np.empty((1, self.stages, particles, 3)),
+                                                 np.empty((1, 2, particles, 3)))
+        return calls
+
     def advance(self, model, state, dt, steps, threads=1):
-        kernel = self.kernel
-        if partition_count(model.particle_count) > 1:
+        call = self.kernel_call(model, state, dt, steps)
+        if call.kernel is self.parallel_kernel:
             numba.set_num_threads(threads)
-            kernel = self.parallel_kernel
         model.arrays.clock[0] = state.time   # the kernels' steps take their times from it
-        done, particle, state.pairs = kernel(model.arrays, state.positions, state.velocities,
-                                             float(dt), int(steps), state.pairs)
+        done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
 
 

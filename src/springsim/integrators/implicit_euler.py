@@ -58,7 +58,7 @@ from ..state import ContactMemory
 from ..wind import add_wind_with_jacobian
 from ..world import (add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_end,
                      step_time)
-from .base import Integrator, register
+from .base import Integrator, KernelCall, register
 from ._steps import add_scaled, copy_positions, drive
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
@@ -453,15 +453,30 @@ class ImplicitEuler(Integrator):
 
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
-        if state.solve_pairs is None or state.solve_pairs.found_at.shape != state.positions.shape:
-            state.solve_pairs = kept_surface_pairs(state.positions)
-        settings = Settings(self.newton_iterations, self.cg_tolerance, self.cg_max_iterations)
+        state.solve_pairs = _solve_pairs(state)
         model.arrays.clock[0] = state.time   # the steps take their times from it (world.py)
-        done, particle, state.pairs = advance(
-            model.arrays, self.solve_layout(model), settings,
-            ImplicitState(state.positions, state.velocities, state.contacts), state.solve_pairs,
-            self.statistics, float(dt), int(steps), state.pairs)
+        call = self.kernel_call(model, state, dt, steps)
+        done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
+
+    def kernel_call(self, model, state, dt, steps) -> KernelCall:
+        """The call ``advance`` makes."""
+        settings = Settings(self.newton_iterations, self.cg_tolerance, self.cg_max_iterations)
+        return KernelCall(advance, (
+            model.arrays, self.solve_layout(model), settings,
+            ImplicitState(state.positions, state.velocities, state.contacts), _solve_pairs(state),
+            self.statistics, float(dt), int(steps), state.pairs))
+
+    def variants(self, model, state, dt):
+        # one kernel: no threaded twin, and both preconditioners' layouts have the same types
+        return {"serial": self.kernel_call(model, state, dt, 0)}
+
+
+def _solve_pairs(state):
+    """The state's surface pair list for the solve, or a new one where it has none that fits."""
+    if state.solve_pairs is None or state.solve_pairs.found_at.shape != state.positions.shape:
+        return kept_surface_pairs(state.positions)
+    return state.solve_pairs
 
 
 def _is_whole(value) -> bool:

@@ -7,9 +7,16 @@ the particles stay the same (stiffness, damping, restitution, friction, drag, in
 body's thickness and self-collision), and starts over when they do not (scene, terrain, cube
 height and rotation, particles per edge). A setting that cannot be simulated leaves everything as
 it was and shows why in ``message``.
+
+In the window (``compile_in_background``), a step whose kernel is not compiled for this
+simulation (a new integrator, the threaded kernel of a large model: warmup.py) compiles on a
+thread, for minutes on two cores, while the window stays live and ``message`` says so with the
+seconds (compile_notice.py); the steps wait for it.
 """
 import copy
 import dataclasses
+import sys
+import threading
 import time
 
 import numpy as np
@@ -24,10 +31,13 @@ from ..scenefile import load_scene
 from ..simulation import Simulation
 from ..springs import SpringKind, SpringParameters
 from ..terrains import TERRAIN_TYPES
+from ..compile_notice import NOTICE, announced, kernels_of
+from ..warmup import is_compiled
 from .frame_stats import FrameStats
 from .mouse_spring import MouseSpring
 
 UNSTABLE_MESSAGE = "System Unstable! Please reset the parameters!"
+COMPILING_MESSAGE = "{notice}: {seconds:.0f} s"
 # The terrain buttons: every kind that names one (``menu_name``: the course framework's plane,
 # tilted plane, sphere and bowl; a mesh terrain needs a file, so it has none), plus none (the
 # cloth scenes have no terrain).
@@ -51,6 +61,11 @@ class Controls:
         self.message = ""
         self.version = 0       # grows with every new Simulation: the drawing must follow
         self.reframe = True    # the camera should frame the scene anew
+        self.compiling = None  # the KernelCompile under way, if any
+        # compile a step's kernel on a thread (the window sets it: it must stay live); without
+        # it, the step compiles where it is called, said on stderr (Simulation)
+        self.compile_in_background = False
+        self._compiled_for = None   # the Simulation whose step kernel is known compiled
         self._load(scene, integrator, dt)
 
     # --- scene and terrain ----------------------------------------------------------------
@@ -252,6 +267,8 @@ class Controls:
         return steps
 
     def _advance(self, count: int) -> int:
+        if not self.step_ready():
+            return 0
         sim = self.sim
         before = sim.steps_taken
         try:
@@ -267,6 +284,35 @@ class Controls:
             self.mouse.release()
             self.message = f"{UNSTABLE_MESSAGE}\n{error}"
         return sim.steps_taken - before
+
+    def step_ready(self) -> bool:
+        """Whether the simulation's step may be taken now. Where its kernel is not compiled and
+        ``compile_in_background`` is set, it compiles on a thread (KernelCompile) and this is
+        false until that is done; a kernel in the cache on disk loads in the step, in a second
+        or two."""
+        sim = self.sim
+        if self._compiled_for is sim:
+            return True
+        done = self.compiling
+        if done is not None:
+            if done.thread.is_alive():
+                return False
+            self.compiling = None
+            if self.message.startswith(done.notice):
+                self.message = ""
+            if done.error is not None:
+                self.running = False
+                self.message = f"compiling {done.what} failed: {done.error}"
+                return False
+        call = step_call(sim) if self.compile_in_background else None
+        if call is not None and not is_compiled(call):
+            self.compiling = KernelCompile(call, kernels_of(sim), self._say)
+            return False
+        self._compiled_for = sim
+        return True
+
+    def _say(self, line: str) -> None:
+        self.message = line
 
     def energy(self) -> dict:
         """Kinetic, gravitational, spring and total energy (J) now."""
@@ -286,6 +332,39 @@ class Controls:
         if not self.mouse.holding:
             return None
         return self.sim.positions[self.mouse.particle]
+
+
+def step_call(sim):
+    """The compiled call a step of ``sim`` makes (integrators.KernelCall), or None for a method
+    that is not one compiled call."""
+    kernel_call = getattr(sim.integrator, "kernel_call", None)
+    if kernel_call is None:
+        return None
+    return kernel_call(sim.model, sim.state, sim.dt, 0)
+
+
+class KernelCompile:
+    """A step kernel compiling on a thread, for its arguments' types (it never runs it), said
+    on stderr as the command line says it (compile_notice.announced) and, through ``say(line)``, in
+    the window: the notice and the seconds so far."""
+
+    def __init__(self, call, what: str, say):
+        self.what, self.error = what, None
+        self.notice = NOTICE.format(what=what)
+        types = tuple(call.kernel.typeof_pyval(argument) for argument in call.arguments)
+        self.thread = threading.Thread(target=self._compile, args=(call.kernel, types, say),
+                                       daemon=True)
+        self.thread.start()
+
+    def _compile(self, kernel, types, say) -> None:
+        def ticking(seconds):
+            say(COMPILING_MESSAGE.format(notice=self.notice, seconds=seconds))
+
+        try:
+            with announced(self.what, sys.stderr, on_compile=ticking):
+                kernel.compile(types)
+        except Exception as error:   # shown in the window, which stays open
+            self.error = error
 
 
 def real_time_steps(dt: float, frames_per_second: float = 60.0) -> int:
