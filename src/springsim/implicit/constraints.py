@@ -59,6 +59,7 @@ import math
 import numpy as np
 
 from .._jit import inline_kernel, kernel
+from ..terrains import still_terrain_distance
 from ..world import surface_velocity, terrain_at, terrain_view
 
 FREE, CONTACT, PINNED = 0, 1, 2
@@ -78,22 +79,10 @@ def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
 
 
 @inline_kernel
-def look_up_terrains(terrains, radius, x, i, lookups):
-    """Each terrain's (phi, normal) at particle i's position at the step's start, into
-    ``lookups[i, t]``. The terrains stand where the step's end has them for the whole step, so
-    this is what every closest_terrain of the step would ask at that point: found once by
-    find_constraints, read by each update_contacts after it (``radius``: the particle's
-    model.terrain_offset[i])."""
-    for t in range(lookups.shape[1]):
-        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
-        lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3] = phi, mx, my, mz
-
-
-@inline_kernel
 def closest_terrain(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, in_reach):
     """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
     normal and the normal velocity; terrain -1 if it reaches none. Each terrain's phi and
-    normal at the particle come from ``lookups`` (look_up_terrains).
+    normal at the particle come from ``lookups`` (find_constraints).
 
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
     start of a step); without, it means ending the step inside (phi + h u_n < 0). Beyond a
@@ -163,7 +152,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     its friction damper as the first guess; a new one starts without. ``kind`` and ``terrain``
     come in as the last step left them: a free particle with a terrain is one a solve released
     (update_contacts), which must also pass ``joins_afresh``, and stays marked (with the
-    terrain found now) if it does not. Fills ``lookups`` (look_up_terrains) for the step's
+    terrain found now) if it does not. Fills ``lookups`` for the step's
     update_contacts."""
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
     for i in range(x.shape[0]):
@@ -175,7 +164,20 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
             kind[i] = PINNED
         else:
             radius = model.terrain_offset[i]
-            look_up_terrains(terrains, radius, x, i, lookups)
+            # each terrain's (phi, normal) at the step's start, where the step's end has it, for
+            # every closest_terrain of the step: a still terrain looked up directly, as
+            # collision/response/terrain.py's STILL_LOOKUP does (through the view, in an inline
+            # kernel per particle, the cube's search was 1.4 to 1.5 times slower:
+            # benchmarks/contact_search.py)
+            for t in range(lookups.shape[1]):
+                if model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0:
+                    phi, mx, my, mz = still_terrain_distance(
+                        model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
+                        x[i, 0], x[i, 1], x[i, 2], radius)
+                else:
+                    phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
+                lookups[i, t, 0], lookups[i, t, 1] = phi, mx
+                lookups[i, t, 2], lookups[i, t, 3] = my, mz
             t, phi, nx, ny, nz, v_n = closest_terrain(terrains, epsilon, radius, lookups, x, i,
                                                       v[i, 0], v[i, 1], v[i, 2], h, True)
             if t >= 0 and released and not joins_afresh(phi, v_n, h, epsilon[t]):
