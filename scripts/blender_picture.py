@@ -5,17 +5,21 @@ in Blender (bpy, the ``blender`` extra) and render one frame with Cycles on the 
 
 Everything in the picture comes from the exported file: the meshes, the balls, the plane, the
 frame; only the camera, the light and the materials (the files' display colours) are added here.
+The camera is springsim's own default (``springsim.render.follow``: it frames what moves at that
+frame, as ``springsim render`` does), turned from springsim's y up to Blender's z up.
 """
 import argparse
+import json
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 RENDER = r'''
-import sys, bpy, math
+import sys, bpy, math, json
 from mathutils import Vector
-usd, out, frame, width, height = sys.argv[-5:]
+usd, out, frame, width, height, view = sys.argv[-6:]
+view = json.loads(view)
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.wm.usd_import(filepath=usd, set_frame_range=True)
 scene = bpy.context.scene
@@ -35,10 +39,11 @@ for obj in bpy.data.objects:
         polygon.use_smooth = kind != "terrain"
 camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
 scene.collection.objects.link(camera)
-camera.location = (10.0, -14.0, 6.0)             # Blender's Z up
-direction = Vector((0.0, 0.0, 1.5)) - camera.location
+camera.location = view["eye"]
+direction = Vector(view["target"]) - camera.location
 camera.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
-camera.data.lens = 40
+camera.data.sensor_fit = "VERTICAL"        # springsim's field of view is the vertical one
+camera.data.angle_y = math.radians(view["fov_degrees"])
 scene.camera = camera
 sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
 sun.data.energy = 4.0
@@ -60,6 +65,25 @@ bpy.ops.render.render(write_still=True)
 '''
 
 
+def springsim_camera(take_path: Path, frame: int, aspect: float) -> dict:
+    """springsim's default camera at Blender frame ``frame`` of the take, in Blender's axes
+    (z up: springsim's (x, y, z) is Blender's (x, -z, y), as Blender imports a y-up USD)."""
+    from springsim.export import load_take
+    from springsim.render.follow import camera_path
+    from springsim.replay.recorded_model import recorded_model
+
+    take = load_take(take_path)
+    cameras = camera_path("auto", recorded_model(take), take.positions, aspect, take.time)
+    camera = cameras[min(max(frame - take.start_frame, 0), take.frame_count - 1)]
+
+    def blender(point):
+        x, y, z = (float(v) for v in point)
+        return [x, -z, y]
+
+    return {"eye": blender(camera.eye), "target": blender(camera.target),
+            "fov_degrees": camera.fov_degrees}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="docs/images/blender.png")
@@ -76,8 +100,11 @@ def main() -> None:
         if code:
             sys.exit(code)
         rendered = Path(folder) / "render.png"
+        view = springsim_camera(Path(folder) / "jelly-balls.npz", args.frame,
+                                args.width / args.height)
         subprocess.run([sys.executable, "-c", RENDER, str(usd), str(rendered), str(args.frame),
-                        str(args.width), str(args.height)], check=True, capture_output=True)
+                        str(args.width), str(args.height), json.dumps(view)], check=True,
+                       capture_output=True)
         from PIL import Image
 
         # a 64-colour palette keeps the README's picture small

@@ -6,7 +6,8 @@ scenes themselves with the headless renderer (``springsim render``, polyscope on
 Each scene is simulated and drawn once, into a folder of PNG frames; the GIF
 (``gallery-NAME.gif``) is made from those frames and the still (``gallery-NAME.png``) is the last
 one. Sizes are kept modest (320 x 180 px, 10 frames per simulated
-second, at most 3 s) so that the whole gallery stays around a few MB in the repository. The
+second, at most 3 s) so that the whole gallery stays around a few MB in the repository. The camera
+is the default one (it frames what moves and follows it: the cape is seen from behind). The
 gallery page (docs/gallery.md) is generated at every build of the site from the list of built-in
 scenes and links these files, so a new scene without pictures fails the strict build.
 """
@@ -21,7 +22,6 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 WIDTH, HEIGHT, FPS, LONGEST = 320, 180, 10, 3.0
-CAMERAS = {"cape": "side"}   # the cape lies on the figure's back: seen from the side, not behind it
 
 
 def render_scene(name: str, duration: float, out: Path) -> None:
@@ -29,8 +29,7 @@ def render_scene(name: str, duration: float, out: Path) -> None:
         frames = Path(folder) / "frames"
         subprocess.run([sys.executable, "-m", "springsim", "render", name, "--out", str(frames),
                         "--duration", f"{duration:g}", "--fps", str(FPS), "--width", str(WIDTH),
-                        "--height", str(HEIGHT), "--camera", CAMERAS.get(name, "auto"),
-                        "--quiet"], check=True)
+                        "--height", str(HEIGHT), "--quiet"], check=True)
         images = [Image.open(path).convert("RGB") for path in sorted(frames.glob("*.png"))]
         if not images:
             raise SystemExit(f"springsim render wrote no frames for {name}")

@@ -26,8 +26,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--width", type=int, default=960, help="pixels (default: 960)")
     parser.add_argument("--height", type=int, default=540, help="pixels (default: 540)")
     parser.add_argument("--camera", default="auto",
-                        help="auto (frames the bodies' whole motion and the terrain near them), "
-                             "front, side, top, or follow (moves with the bodies)")
+                        help="auto (frames what moves and follows it, facing the side of the "
+                             "bodies that the terrains moving with them leave open), front, side "
+                             "or top (follow it from those sides), still (stays put, framing the "
+                             "whole motion), or follow (the same as auto) (default: auto)")
     parser.add_argument("--draw", default="surfaces,balls,terrains,pins,wind",
                         help="comma-separated parts to draw, among " + ", ".join(DRAWABLE)
                              + " (default: surfaces,balls,terrains,pins,wind)")

@@ -13,7 +13,8 @@ with signals.deferred():
     import polyscope.imgui  # noqa: F401
 
 from .backend import RenderUnavailable, capture, start_renderer
-from .camera import CAMERA_NAMES, Camera, apply_camera, camera_path, frame_points, scene_points
+from .camera import Camera, apply_camera, frame_points, scene_points
+from .follow import CAMERA_NAMES, camera_path, start_camera, still_camera
 from .drawing import DrawOptions, SceneDrawing
 from .movie import draw_frame, render_video, write_video
 from .frames import simulate_frames
@@ -22,5 +23,6 @@ from .video import FrameWriter, output_format
 __all__ = ["write_video", "render_video", "draw_frame", "DrawOptions", "SceneDrawing",
            "Camera",
            "CAMERA_NAMES", "camera_path", "frame_points", "scene_points", "apply_camera",
+           "start_camera", "still_camera",
            "start_renderer", "capture", "RenderUnavailable", "FrameWriter", "output_format",
            "simulate_frames"]

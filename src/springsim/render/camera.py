@@ -1,20 +1,18 @@
-"""Cameras that frame a scene: the bodies plus the part of the terrains near them.
+"""Cameras that frame a cloud of points (the named cameras a video uses are in follow.py).
 
 Directions are given as azimuth (degrees from +z towards +x) and elevation (degrees above the
-horizontal plane, y up). A camera looks at the middle of a cloud of points (the bodies and the
-terrain near them) from just far enough that every point lies inside the picture.
+horizontal plane, y up). A camera looks at the middle of a cloud of points from just far enough
+that every point lies inside the picture.
 """
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import require
 
 FOV_DEGREES = 40.0
 MARGIN = 1.08
 VIEWS = {"auto": (35.0, 25.0), "front": (0.0, 8.0), "side": (90.0, 8.0), "top": (0.0, 88.0)}
-CAMERA_NAMES = (*VIEWS, "follow")
 
 
 @dataclass(frozen=True)
@@ -61,7 +59,13 @@ def view_direction(azimuth: float, elevation: float) -> np.ndarray:
 
 def frame_points(points, azimuth: float, elevation: float, aspect: float,
                  fov_degrees: float = FOV_DEGREES) -> Camera:
-    """The camera that sees every point from (azimuth, elevation), as close as it can.
+    """The camera that sees every point from (azimuth, elevation), as close as it can."""
+    return frame_along(points, view_direction(azimuth, elevation), aspect, fov_degrees)
+
+
+def frame_along(points, toward_eye, aspect: float, fov_degrees: float = FOV_DEGREES) -> Camera:
+    """The camera that sees every point looking against ``toward_eye`` (a unit vector from the
+    target to the eye), as close as it can.
 
     It looks at the middle of the points' extent across the view; a point at offset p from
     there appears at (p.right, p.up) over a depth of D - p.d, with d the unit vector towards the
@@ -69,7 +73,7 @@ def frame_points(points, azimuth: float, elevation: float, aspect: float,
     least distance D that fits every point follows.
     """
     points = np.asarray(points, float).reshape(-1, 3)
-    toward_eye = view_direction(azimuth, elevation)
+    toward_eye = np.asarray(toward_eye, float)
     right, up, _ = Camera(eye=toward_eye, target=np.zeros(3)).basis()
     axes = np.stack([right, up, toward_eye])
     local = points @ axes.T
@@ -106,23 +110,6 @@ def scene_points(model, positions) -> np.ndarray:
     size = float(np.linalg.norm(high - low))
     near = [terrain.points_near(corners, size) for terrain in model.terrains]
     return np.concatenate([bodies, *near])
-
-
-def camera_path(name: str, model, positions, aspect: float) -> list:
-    """One camera per frame of ``positions`` (F, P, 3).
-
-    ``auto``, ``front``, ``side`` and ``top`` stay put and frame the whole motion; ``follow``
-    frames the first frame from the ``auto`` direction and then moves with the bodies' centre.
-    """
-    require(name in CAMERA_NAMES, "camera", name, "must be one of " + ", ".join(CAMERA_NAMES))
-    positions = np.asarray(positions)
-    if name != "follow":
-        camera = frame_points(scene_points(model, positions), *VIEWS[name], aspect)
-        return [camera] * len(positions)
-    first = frame_points(scene_points(model, positions[0]), *VIEWS["auto"], aspect)
-    centres = positions.mean(axis=1)
-    shifts = centres - centres[0]
-    return [Camera(eye=first.eye + s, target=first.target + s) for s in shifts]
 
 
 def apply_camera(camera: Camera) -> None:

@@ -6,7 +6,8 @@ from tqdm import tqdm
 
 from ..errors import require
 from .backend import capture, start_renderer
-from .camera import apply_camera, camera_path
+from .camera import apply_camera
+from .follow import camera_path
 from .drawing import DrawOptions, SceneDrawing
 from .label import stamp_time
 from .video import FrameWriter, check_output
@@ -34,7 +35,7 @@ def render_video(model, times, positions, path, *, fps=60, width=960, height=540
     require(times.shape == (len(positions),), "times", times.shape,
             f"must hold one time per frame ({len(positions)})")
     check_output(path, width, height, fps)
-    cameras = camera_path(camera, model, positions, width / height)
+    cameras = camera_path(camera, model, positions, width / height, times)
     start_renderer(headless=True, width=width, height=height)
     drawing = SceneDrawing(model, draw, positions[0])
     bar = progress and sys.stderr.isatty()

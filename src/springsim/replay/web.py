@@ -138,11 +138,11 @@ class WebReplay:
                 l, "points", x[s])))
 
     def _frame_camera(self) -> None:
-        from ..render.camera import VIEWS, frame_points, scene_points
+        from ..render.follow import still_camera
 
         stride = max(1, self.take.frame_count // 50)
-        camera = frame_points(scene_points(self.model, self.take.positions[::stride]),
-                              *VIEWS["auto"], 16 / 9)
+        camera = still_camera("auto", self.model, self.take.positions[::stride], 16 / 9,
+                              self.take.time[::stride])
         initial = self.server.initial_camera
         initial.position, initial.look_at = tuple(camera.eye), tuple(camera.target)
         initial.up = (0.0, 1.0, 0.0)

@@ -6,7 +6,8 @@ import polyscope as ps
 import polyscope.imgui as psim
 
 from ..render.backend import show_frames, start_renderer
-from ..render.camera import VIEWS, apply_camera, frame_points, scene_points
+from ..render.camera import apply_camera
+from ..render.follow import still_camera
 from ..render.drawing import DrawOptions, SceneDrawing
 from ..viewer.panel import WIDTH as PANEL_WIDTH, draw_toggles
 from .recorded_model import recorded_model
@@ -47,8 +48,8 @@ class ReplayViewer:
         height = max(height, 1)
         panel = min(PANEL_SPACE, width // 2)
         stride = max(1, self.take.frame_count // 50)
-        points = scene_points(self.model, self.take.positions[::stride])
-        camera = frame_points(points, *VIEWS[view], (width - panel) / height)
+        camera = still_camera(view, self.model, self.take.positions[::stride],
+                              (width - panel) / height, self.take.time[::stride])
         apply_camera(camera.shifted(panel / 2, height))
 
     def set_drawn(self, name: str, shown: bool) -> None:

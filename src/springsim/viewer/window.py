@@ -8,7 +8,8 @@ import polyscope as ps
 import polyscope.imgui as psim
 
 from ..render.backend import capture, show_frames, start_renderer
-from ..render.camera import VIEWS, apply_camera, frame_points, scene_points
+from ..render.camera import apply_camera
+from ..render.follow import start_camera
 from ..render.drawing import SceneDrawing
 from .mouse_spring import nearest_particle, point_on_drag_plane
 from .panel import WIDTH as PANEL_WIDTH, Panel
@@ -22,6 +23,7 @@ class Viewer:
     def __init__(self, controls, *, headless: bool = False, width: int = 1280,
                  height: int = 800, record_folder="."):
         self.controls = controls
+        controls.compile_in_background = True   # a compile must not freeze the window
         self.headless = headless
         self.backend = start_renderer(headless=headless, width=width, height=height)
         self.recorder = ScreenRecorder(record_folder)
@@ -65,13 +67,14 @@ class Viewer:
 
     # --- what the panel asks for ----------------------------------------------------------
     def look(self, view: str) -> None:
-        """Frame the scene as it is now from one of the named directions."""
+        """Frame what moves as it is now from one of the named directions (``auto``: facing the
+        side of the bodies the terrains moving with them leave open)."""
         width, height = ps.get_window_size()
         height = max(height, 1)
         panel = min(PANEL_SPACE, width // 2)     # keep the scene clear of the panel
         c = self.controls
-        points = scene_points(c.sim.model, c.sim.positions[None])
-        camera = frame_points(points, *VIEWS[view], (width - panel) / height)
+        camera = start_camera(view, c.sim.model, c.sim.positions, (width - panel) / height,
+                              c.sim.time)
         apply_camera(camera.shifted(panel / 2, height))
 
     def set_drawn(self, name: str, shown: bool) -> None:
