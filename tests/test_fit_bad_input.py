@@ -108,3 +108,85 @@ def test_a_parameter_that_cannot_be_fitted(capsys, tmp_path, scene_file, key, wo
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and all(word in lines[0] for word in words), lines
     assert not out.exists()
+
+
+# --- issue 56, item 9: files that are not what they say, and options out of range ----------------
+
+def _truncated(path, good):
+    data = good.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
+def _corrupt(path, good):
+    data = bytearray(good.read_bytes())
+    middle = len(data) // 3   # inside the first array's bytes: its CRC no longer matches
+    data[middle:middle + 64] = bytes(64)
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("damage", [
+    lambda path, good: path.write_bytes(b""),            # empty
+    _truncated,
+    _corrupt,
+    lambda path, good: np.save(path.with_suffix(".npy"), np.zeros(3)) or
+    path.with_suffix(".npy").rename(path),               # an .npy array named .npz
+], ids=["empty", "truncated", "corrupt", "npy"])
+def test_a_damaged_take_is_one_line(capsys, tmp_path, scene_file, damage):
+    good = take(tmp_path / "good.npz", [0.0, 0.1])
+    observed = tmp_path / "take.npz"
+    damage(observed, good)
+    refused(capsys, tmp_path, scene_file, observed, ["--observed", "take.npz", "NPZ take"])
+
+
+@pytest.mark.parametrize("damage", [
+    lambda path, good: path.write_bytes(b""), _truncated, _corrupt,
+], ids=["empty", "truncated", "corrupt"])
+def test_observed_take_refuses_a_damaged_file_from_python(tmp_path, damage):
+    from springsim.errors import SceneError
+    from springsim.gradients.losses import ObservedTake
+
+    good = take(tmp_path / "good.npz", [0.0, 0.1])
+    observed = tmp_path / "take.npz"
+    damage(observed, good)
+    with pytest.raises(SceneError, match="NPZ take"):
+        ObservedTake(observed)
+
+
+@pytest.mark.parametrize("content", [bytes(range(256)) * 4, bytes(64), b"\xff\xfe\x00t\x00i\x00m\x00e"],
+                         ids=["binary", "nul", "utf-16"])
+def test_a_binary_marker_file_is_one_line(capsys, tmp_path, scene_file, content):
+    observed = tmp_path / "m.csv"
+    observed.write_bytes(content)
+    refused(capsys, tmp_path, scene_file, observed, ["--observed", "m.csv"])
+
+
+def test_a_marker_at_a_negative_time(capsys, tmp_path, scene_file):
+    observed = markers(tmp_path / "m.csv",
+                       "time,marker,x,y,z\n-0.1,0,-0.5,1.5,-0.5\n0.0,0,-0.5,1.5,-0.5\n")
+    refused(capsys, tmp_path, scene_file, observed, ["--observed", "line 2", "-0.1", ">= 0"])
+
+
+@pytest.mark.parametrize("tolerance", ["nan", "-1", "inf"])
+def test_a_tolerance_out_of_range(capsys, tmp_path, scene_file, tolerance):
+    observed = take(tmp_path / "take.npz", [0.0, 0.1])
+    refused(capsys, tmp_path, scene_file, observed, ["--tolerance", tolerance, ">= 0"],
+            "--tolerance", tolerance)
+
+
+@pytest.mark.parametrize("answer", ["1.5", b"1.5", [1.0, 2.0], None, True, ("1.5", 0.0)],
+                         ids=["string", "bytes", "list", "none", "bool", "tuple of a string"])
+def test_a_loss_that_returns_no_number(scene_file, answer):
+    import springsim
+    from springsim.errors import SceneError
+
+    scene = springsim.load_scene(str(scene_file), ["dt=0.002"])
+
+    def loss(frames):
+        if isinstance(answer, tuple):
+            return answer[0], np.zeros_like(frames)
+        return answer
+
+    with pytest.raises(SceneError) as refusal:
+        springsim.gradient(scene, loss, ["bodies.0.structural.ks"], duration=0.004)
+    assert str(refusal.value).startswith("loss = ") and "real number" in str(refusal.value)
+    assert "\n" not in str(refusal.value)

@@ -215,5 +215,6 @@ def test_a_printed_built_in_scene_names_its_meshes_portably_and_runs_from_anothe
 def test_a_builtin_mesh_that_is_not_installed_is_one_line(capsys):
     assert main(["scenes", "jelly-torus", "--set", "bodies.0.file=builtin:teapot.obj"]) == 2
     assert capsys.readouterr().err == (
-        "springsim scenes: bodies.0.file = 'builtin:teapot.obj': is not a mesh installed with "
-        "springsim; those are builtin:platform.obj, builtin:stairs.obj, builtin:torus.obj\n")
+        "springsim scenes: bodies.0.file = 'builtin:teapot.obj': is not a file installed with "
+        "springsim; those are builtin:platform.obj, builtin:stairs.obj, builtin:torus.obj, "
+        "builtin:walking-figure.obj, builtin:walking-figure.pc2\n")

@@ -6,6 +6,12 @@ integrators. SI units throughout: metres, kilograms, seconds.
     sim.advance(2.0)
     sim.positions, sim.velocities, sim.time, sim.energy()
 """
+import os as _os
+
+# Numba's coloured error messages start colorama, whose exit hook writes a colour reset (ESC[0m)
+# to a terminal after every run; springsim says its errors in its own one-line messages
+_os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
+
 TYPE_CHECKING = False   # typing's own, without importing typing (10 ms of the start-up)
 if TYPE_CHECKING:   # what the reference documents; imported at first use at run time (below)
     from .errors import SceneError, SimulationDiverged

@@ -144,9 +144,11 @@ def cape() -> Scene:
     files = figure_files()
     figure = MeshTerrain(file=str(files.mesh), friction=0.4, restitution=0.0,
                          animation=Animation(str(files.cache), fps=FIGURE_FPS))
-    y = NECK[1] + 0.01   # a centimetre over the top of the figure's body
-    neck = Pin(region=Region(min=(-NECK_HALF_WIDTH, y - 0.005, NECK[2] - 0.006),
-                             max=(NECK_HALF_WIDTH, y + 0.005, NECK[2] + 0.006)),
+    # lengths to the micrometre, so that the printed scene says 1.59 where a float sum would
+    # leave 1.5899999999999999
+    y = round(float(NECK[1]) + 0.01, 6)   # a centimetre over the top of the figure's body
+    neck = Pin(region=Region(min=(-NECK_HALF_WIDTH, round(y - 0.005, 6), NECK[2] - 0.006),
+                             max=(NECK_HALF_WIDTH, round(y + 0.005, 6), NECK[2] + 0.006)),
                follow="terrains.1")
     # a fabric that bends softly (the default sheet's 50 N/m holds a cape out like a board),
     # and no drag: the reference cloth's 3.4e-4 N s/m a particle would hold these 48 mg

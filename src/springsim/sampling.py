@@ -9,6 +9,10 @@ fixed number of steps per frame, so the frames stay within dt/2 of k/fps (a vide
 time at dt = 1/60 s and 25 fps). When 1/fps is shorter than dt neighbouring frames repeat a state:
 the frame count, and so a video's pace, stays that of the fps asked for.
 
+A dt that is a frame's step written to a few digits (0.016667 for 1/60 s, 0.033333 for 1/30 s)
+is taken as that step exactly (``frame_step``): frames then fall on whole steps at the exact
+frame times, and a take that ``run`` writes lies on the step grid that ``fit`` compares it on.
+
 The frame count and the memory the frames need are checked from these numbers alone, before any
 array is made, and refused with one line naming the value, the estimate and the machine's memory.
 """
@@ -22,6 +26,13 @@ from . import sizes
 MAX_FRAMES = 1_000_000        # 4.6 hours at 60 fps; more would take hours to record or draw
 FRAME_MEMORY_SHARE = 0.5      # of the machine's memory, for the kept frames
 MAX_STEPS = 2 ** 53           # steps are counted exactly in float64
+# The fewest significant digits a dt must be written with to be read as a rounded frame step:
+# 0.0167 is 1/60 s to 0.2 %, but 0.02 is not meant as 1/60 s (20 % off)
+ROUNDED_STEP_DIGITS = 3
+# The most steps a frame (or frames a step) a rounded dt is read as a whole fraction of: past
+# it, 3 digits would match some 1/(n fps) by chance (0.000125 s, 1/8000 s, is 1/(133 * 60) s
+# to 3 digits)
+MOST_FRAME_PARTS = 4
 
 
 def frame_count(duration: float, fps: float, dt: float) -> int:
@@ -35,6 +46,27 @@ def frame_count(duration: float, fps: float, dt: float) -> int:
             f"makes {intervals + 1:.3g} frames in {duration:g} s; at most {MAX_FRAMES:,} frames "
             f"are kept: lower fps or duration")
     return intervals + 1 + int(duration - intervals / fps > dt / 2)
+
+
+def frame_step(dt: float, fps: float) -> float:
+    """``dt``, or the whole fraction or multiple of a frame, 1/(n fps) or m/fps, that it is
+    when written to its own significant digits (at least ROUNDED_STEP_DIGITS of them; n and m
+    at most MOST_FRAME_PARTS):
+    0.016667 at 60 fps (or 30) is 1/60 s exactly, 0.033333 at 60 fps is 2/60 s."""
+    ratio = dt * fps
+    if not 1 / (MOST_FRAME_PARTS + 0.5) < ratio < MOST_FRAME_PARTS + 0.5:
+        return dt
+    parts = round(1 / ratio) if ratio < 1 else round(ratio)
+    exact = 1 / (fps * parts) if ratio < 1 else parts / fps
+    digits = significant_digits(dt)
+    if digits >= ROUNDED_STEP_DIGITS and float(f"{exact:.{digits - 1}e}") == dt:
+        return exact
+    return dt
+
+
+def significant_digits(value: float) -> int:
+    """The significant digits of the shortest decimal that reads back as ``value``."""
+    return next(d for d in range(1, 18) if float(f"{value:.{d - 1}e}") == value)
 
 
 def check_duration(duration) -> None:

@@ -94,8 +94,22 @@ def with_automatic_step(scene: Scene) -> Scene:
 
     estimate = automatic_step(scene)
     warnings.warn(f"the scene gives no dt: dt = {estimate.dt:.3g} s, from {estimate.basis}",
-                  AutomaticStep, stacklevel=3)
+                  AutomaticStep, stacklevel=_user_level())
     return dataclasses.replace(scene, dt=estimate.dt)
+
+
+def _user_level() -> int:
+    """The ``stacklevel`` that makes a warning from the function calling this one name the
+    first caller outside springsim (the user's line, however deep in springsim the warning
+    starts): Python 3.12's ``skip_file_prefixes``, which 3.11 lacks."""
+    import sys
+
+    package = str(Path(__file__).resolve().parent) + os.sep
+    frame, level = sys._getframe(2), 2   # level 1 is the function that warns
+    while frame is not None and str(Path(frame.f_code.co_filename).resolve()).startswith(
+            package):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 class AutomaticStep(UserWarning):
@@ -175,38 +189,67 @@ def scene_from_table(table: dict) -> Scene:
 
 
 def _mesh_files(scene: Scene):
-    """(key, item) for every body and terrain that has a ``file``."""
+    """(key, item) for every body and terrain that has a ``file``, and every point cache of
+    theirs or their pins' (an ``animation`` with a ``file``)."""
     for list_name in ("bodies", "terrains"):
         for index, item in enumerate(getattr(scene, list_name)):
+            key = f"{list_name}.{index}"
             if isinstance(getattr(item, "file", None), str):
-                yield f"{list_name}.{index}.file", item
+                yield f"{key}.file", item
+            owners = [(key, item)] + [(f"{key}.pins.{n}", pin)
+                                      for n, pin in enumerate(getattr(item, "pins", None) or [])]
+            for owner_key, owner in owners:
+                animation = getattr(owner, "animation", None)
+                if isinstance(getattr(animation, "file", None), str):
+                    yield f"{owner_key}.animation.file", animation
+
+
+class MadeFile(typing.NamedTuple):
+    path: Path                      # where it is made, made or not
+    make: typing.Callable[[], Path]  # make it if it is not there yet; its path
+
+
+def _made_files() -> dict:
+    """{name: MadeFile} for the files springsim makes on first use rather than installs: the
+    walking figure of the cape scene (walking_figure.py), made in the user's cache."""
+    from .walking_figure import figure_files, figure_paths
+
+    paths = figure_paths()
+    return {"walking-figure.obj": MadeFile(paths.mesh, lambda: figure_files().mesh),
+            "walking-figure.pc2": MadeFile(paths.cache, lambda: figure_files().cache)}
 
 
 def builtin_meshes_found(scene: Scene) -> Scene:
-    """The scene with each ``builtin:NAME`` file replaced by that installed mesh's path."""
+    """The scene with each ``builtin:NAME`` file replaced by that installed (or made) file's
+    path."""
     for key, item in _mesh_files(scene):
         if item.file.startswith(BUILTIN_MESH):
             name = item.file[len(BUILTIN_MESH):]
+            made = _made_files()
             installed = sorted(path.name for path in MESHES.iterdir() if path.is_file())
-            require(name in installed, key, item.file,
-                    "is not a mesh installed with springsim; those are "
-                    + ", ".join(BUILTIN_MESH + each for each in installed))
-            item.file = str(MESHES / name)
+            require(name in installed or name in made, key, item.file,
+                    "is not a file installed with springsim; those are "
+                    + ", ".join(BUILTIN_MESH + each for each in [*installed, *made]))
+            item.file = str(made[name].make() if name in made else MESHES / name)
     return scene
 
 
 def with_builtin_mesh_names(scene: Scene) -> Scene:
-    """A copy of the scene whose files that are meshes installed with springsim are written
-    ``builtin:NAME`` (which the reader finds wherever springsim is installed), not by this
-    installation's path: what `springsim scenes` prints runs from any folder."""
+    """A copy of the scene whose files that are meshes installed with springsim (or the files it
+    makes: the walking figure) are written ``builtin:NAME`` (which the reader finds wherever
+    springsim is installed), not by this installation's path: what `springsim scenes` prints
+    runs from any folder."""
     import copy
 
     scene = copy.deepcopy(scene)
+    made = {str(each.path.expanduser().resolve()): name for name, each in _made_files().items()}
     for _, item in _mesh_files(scene):
         if item.file and not item.file.startswith(BUILTIN_MESH):
             path = Path(item.file).expanduser().resolve()
             if path.parent == MESHES and path.is_file():
                 item.file = BUILTIN_MESH + path.name
+            elif str(path) in made:
+                item.file = BUILTIN_MESH + made[str(path)]
     return scene
 
 

@@ -25,13 +25,13 @@ IMPLICIT = ("implicit_euler",)
 
 class StepEstimate(NamedTuple):
     dt: float           # s
-    basis: str          # what it was chosen from, in words
+    basis: str          # what it was chosen from, in words ("dt = ... s, from <basis>")
 
 
 def stable_step(model, integrator: str = "rk4") -> StepEstimate:
     """The step of the explicit method ``integrator`` for ``model`` (module doc)."""
     arrays = model.arrays
-    no_springs = StepEstimate(NO_SPRINGS_STEP, "no springs: the course framework's step")
+    no_springs = StepEstimate(NO_SPRINGS_STEP, "the course framework's step (no springs)")
     if len(arrays.springs) == 0:
         return no_springs
     a, b = arrays.springs[:, 0].astype(np.int64), arrays.springs[:, 1].astype(np.int64)
@@ -56,5 +56,6 @@ def automatic_step(scene) -> StepEstimate:
     from .model import build_model
 
     if scene.integrator in IMPLICIT:
-        return StepEstimate(IMPLICIT_STEP, f"{scene.integrator} is stable at a frame's step")
+        return StepEstimate(IMPLICIT_STEP, f"a frame's step, at which {scene.integrator} is "
+                            "stable")
     return stable_step(build_model(scene), scene.integrator)

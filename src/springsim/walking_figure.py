@@ -87,14 +87,19 @@ class FigureFiles(NamedTuple):
     cache: Path
 
 
-def figure_files() -> FigureFiles:
-    """The figure's OBJ (its rest pose at time 0) and PC2 (every frame), made once."""
+def figure_paths() -> FigureFiles:
+    """Where the figure's files are made (in the user's cache), made or not."""
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     folder = base / "springsim" / f"walking-figure-{VERSION}"
-    files = FigureFiles(folder / "figure.obj", folder / "figure.pc2")
+    return FigureFiles(folder / "figure.obj", folder / "figure.pc2")
+
+
+def figure_files() -> FigureFiles:
+    """The figure's OBJ (its rest pose at time 0) and PC2 (every frame), made once."""
+    files = figure_paths()
     if files.mesh.is_file() and files.cache.is_file():
         return files
-    folder.mkdir(parents=True, exist_ok=True)
+    files.mesh.parent.mkdir(parents=True, exist_ok=True)
     pieces = parts()
     faces, offset = [], 0
     for part in pieces:

@@ -68,11 +68,11 @@ def read_take(args):
     from ..recording import record
     from ..scenefile import load_scene
     from ..simulation import Simulation
-    from .run import DEFAULT_FPS
+    from .run import DEFAULT_FPS, on_frames
 
-    scene = load_scene(args.recording, [] if args.duration is None
-                       else [f"duration={args.duration!r}"])
     fps = DEFAULT_FPS if args.fps is None else args.fps
+    scene = on_frames(load_scene(args.recording, [] if args.duration is None
+                                 else [f"duration={args.duration!r}"]), fps)
     recording = record(Simulation(scene), scene.duration, fps, progress=not args.quiet)
     return take_from_arrays(recording.arrays(), scene.name)
 

@@ -19,8 +19,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--duration", type=float, metavar="SECONDS",
                         help="simulated time in s (default: the observation's last time)")
     parser.add_argument("--fps", type=float,
-                        help="accepted for symmetry with run; the observation's own times are "
-                             "compared")
+                        help="the frame rate a --dt that rounds a frame's step is read against, "
+                             "as `run` reads it (default: the take's, else 60); the "
+                             "observation's own times are compared")
     parser.add_argument("--match", choices=("nearest", "index"), default="nearest",
                         help="how a CSV marker is tied to a particle (default: nearest at the "
                              "start)")
@@ -37,20 +38,23 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..errors import require
-    from ..gradients.fit import fit
+    from ..gradients.fit import check_tolerance, fit
     from ..gradients.losses import observed
     from ..safe_files import atomic_output, check_output_path
     from ..scenefile import scene_to_toml
-    from .run import default_output, scene_from_arguments
+    from .run import DEFAULT_FPS, default_output, on_frames, scene_from_arguments
 
-    loss = observed(args.observed, args.match)
     require(args.max_iterations >= 1, "--max-iterations", args.max_iterations,
             "must be a whole number >= 1")
+    check_tolerance(args.tolerance, "--tolerance")
+    loss = observed(args.observed, args.match)
     duration = args.duration
     if duration is None:
         duration = float(max(loss.time))
         args.duration = duration
-    scene = scene_from_arguments(args)
+    # the time base `run` recorded the take on: the same --dt at the same fps is the same step
+    fps = args.fps if args.fps is not None else getattr(loss, "fps", None) or DEFAULT_FPS
+    scene = on_frames(scene_from_arguments(args), fps)
     out = args.out or default_output(scene.name).removesuffix(".npz") + "-fit.toml"
     check_output_path("--out", out)
     if args.plot:

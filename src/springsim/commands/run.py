@@ -90,7 +90,7 @@ def run(args) -> int:
     args.fps = DEFAULT_FPS if args.fps is None else args.fps
     if args.checkpoint_every is not None:
         check_interval(args.checkpoint_every)
-    scene = resumed.scene if resumed else scene_from_arguments(args)
+    scene = resumed.scene if resumed else on_frames(scene_from_arguments(args), args.fps)
     if not resumed:
         args.fps = step_fps(scene.dt, args.fps, duration=scene.duration, quiet=args.quiet)
     out = args.out or default_output(output_name(args.scene, scene.name))
@@ -137,22 +137,38 @@ def run(args) -> int:
     return 0
 
 
+def on_frames(scene, fps: float):
+    """``scene`` with a dt that is a frame's step (or a whole fraction or multiple of it) written
+    to a few digits taken as that step exactly (sampling.frame_step): --dt 0.016667 at 60 or
+    30 fps is 1/60 s, so that the frames lie at the exact frame times on whole steps, where
+    `fit` with the same options compares them."""
+    from ..sampling import check_fps, frame_step
+
+    check_fps(fps)
+    scene.dt = frame_step(scene.dt, fps)
+    return scene
+
+
 def step_fps(dt: float, fps: float, duration: float | None = None, quiet: bool = False) -> float:
-    """The frame rate to record at: ``fps``, or one frame a step (1/dt) when a step is longer
-    than a frame, said on stderr once the frame count is known to be allowed (bad input is one
-    line). Frames between two steps would repeat the state before them: a take exported from
-    them stutters (every other frame frozen at dt = 2/fps)."""
+    """The frame rate to record at: ``fps``, or one frame a step when a step is longer than a
+    frame (1/dt; fps/m for a dt of exactly m frames), said on stderr once the frame count is
+    known to be allowed (bad input is one line). Frames between two steps would repeat the
+    state before them: a take exported from them stutters (every other frame frozen at
+    dt = 2/fps). The fps asked for is checked as asked (``--fps 1e9`` is refused, not turned
+    into a frame a step)."""
     from ..sampling import check_fps, frame_count
 
     check_fps(fps)
-    if dt * fps <= 1:
-        return fps
     if duration is not None:
-        frame_count(duration, 1 / dt, dt)
+        frame_count(duration, fps, dt)
+    frames = dt * fps
+    if frames <= 1:
+        return fps
+    rate = fps / round(frames) if round(frames) / fps == dt else 1 / dt
     if not quiet:
         print(f"springsim run: dt = {dt:g} s is longer than 1/fps = {1 / fps:g} s: recording "
-              f"a frame at every step, at the steps' own times ({1 / dt:g} fps)", file=sys.stderr)
-    return 1 / dt
+              f"a frame at every step, at the steps' own times ({rate:g} fps)", file=sys.stderr)
+    return rate
 
 
 def write_video_of(simulation, recording, path) -> str | None:

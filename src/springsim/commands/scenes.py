@@ -33,15 +33,16 @@ def run(args) -> int:
 
 
 def explain_builtin_meshes(text: str) -> str:
-    """A ``file = "builtin:NAME"`` line gets a comment above it: what it is, and how to use a
-    mesh of one's own instead."""
+    """The first ``file = "builtin:NAME"`` line gets a comment above it: what it is, and how to
+    use a mesh of one's own instead."""
     from ..scenefile import BUILTIN_MESH
 
-    lines = []
+    lines, said = [], False
     for line in text.splitlines(keepends=True):
-        if line.startswith(f'file = "{BUILTIN_MESH}'):
-            lines.append("# builtin:NAME is a mesh installed with springsim, found from any "
-                         "folder; a path of your\n# own is read from this file's folder "
-                         "(file = \"my_mesh.obj\" beside it)\n")
+        if line.startswith(f'file = "{BUILTIN_MESH}') and not said:
+            said = True
+            lines.append("# builtin:NAME is a file springsim installs (or makes once, as the "
+                         "walking figure), found from\n# any folder; a path of your own is read "
+                         "from this file's folder (file = \"my_mesh.obj\" beside it)\n")
         lines.append(line)
     return "".join(lines)

@@ -55,13 +55,14 @@ def check_target(path, key: str = "export"):
 
 
 def listed(paths) -> str:
-    """The paths written, for a summary line: a numbered sequence (obj_sequence.py) as its first
-    and last file and its count, not a name a frame."""
+    """The paths written, for a summary line, each once (an .mdd and a .pc2 of one take share
+    their rest-pose .obj): a numbered sequence (obj_sequence.py) as its first and last file and
+    its count, not a name a frame."""
     def sequence(path) -> str:
         return re.sub(r"\d+(?=\.obj$)", "#", os.fspath(path), flags=re.IGNORECASE)
 
     parts = []
-    for _, group in itertools.groupby(map(os.fspath, paths), key=sequence):
+    for _, group in itertools.groupby(dict.fromkeys(map(os.fspath, paths)), key=sequence):
         group = list(group)
         parts.append(f"{group[0]} to {group[-1]} ({len(group)} files)" if len(group) > 2
                      else ", ".join(group))

@@ -15,9 +15,11 @@ import numpy as np
 from ..errors import SceneError, require
 from ..file_kinds import NPZ_MAGIC, is_recording_file, names_recording  # noqa: F401
 from ..recording_layout import Layout, read_layout
+from ..sampling import MAX_FRAMES, check_frame_memory
 
 REQUIRED = ("time", "fps", "positions")
 START_FRAME = 1   # an exported take's first frame number: Blender's first frame, Houdini's too
+RESAMPLE_ARRAYS = 4   # (F, P, 3) arrays resampling holds at once: two neighbours, two weighted
 
 
 @dataclass(frozen=True)
@@ -83,7 +85,11 @@ def resampled(take: Take, fps: float, duration: float | None = None) -> Take:
     require(math.isfinite(fps) and fps > 0, "--fps", fps, "must be > 0")
     start, last = float(take.time[0]), float(take.time[-1])
     span = last - start if duration is None else min(float(duration), last - start)
+    # the frame count and its memory are checked from the numbers before any array is made
+    require(span * fps < MAX_FRAMES, "--fps", fps, f"makes {span * fps + 1:.3g} frames of the "
+            f"{span:g} s take; at most {MAX_FRAMES:,} frames are kept: lower --fps")
     count = int(math.floor(span * fps + 1e-6)) + 1
+    check_frame_memory(count, take.positions.shape[1], RESAMPLE_ARRAYS, fps)
     times = start + np.arange(count) / fps
     if count <= take.frame_count and np.allclose(times, take.time[:count], rtol=0, atol=1e-9):
         return replace(take, time=np.asarray(take.time[:count], float), fps=float(fps),

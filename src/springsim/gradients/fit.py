@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from ..errors import SceneError, SimulationDiverged
+from ..errors import SceneError, SimulationDiverged, is_finite, require
 from . import prepare, run_gradient
 
 BOUND_FACTOR = 1000.0
@@ -38,6 +38,14 @@ class FitResult:
     frames: object = None     # (F, P, 3) the positions of the last evaluation
 
 
+def check_tolerance(tolerance, key: str) -> None:
+    """L-BFGS-B stops when the loss changes relatively less than ``tolerance``: a NaN would
+    never stop it early and a negative one means nothing."""
+    require(not isinstance(tolerance, (bool, str, bytes)) and is_finite(tolerance)
+            and np.ndim(tolerance) == 0 and tolerance >= 0, key, tolerance,
+            "must be a finite relative change of the loss >= 0 (default 1e-10)")
+
+
 def is_positive(name: str) -> bool:
     return name.split(".")[-1] in POSITIVE_WORDS or ".stiffness_regions." in name
 
@@ -46,6 +54,7 @@ def fit(scene, loss, wrt, duration, integrator=None, dt=None, threads=None, max_
         tolerance=1e-10, progress=None, **integrator_options):
     """Fit the parameters ``wrt`` names so that ``loss`` is least; ``progress(iteration, loss,
     values)`` is called after each iteration."""
+    check_tolerance(tolerance, "tolerance")
     _, simulation, params = prepare(scene, wrt, None, integrator, dt, duration, threads,
                                     **integrator_options)
     loss.check(simulation.model, duration, simulation.dt)

@@ -17,6 +17,8 @@ work (``check``: one clear line), and maps the positions at those steps (F, P, 3
 """
 import csv
 import math
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -38,21 +40,45 @@ def steps_of(times, dt, key):
     return steps.astype(np.int64)
 
 
+def read_take(path, source: str) -> dict:
+    """The time, positions and fps of the NPZ take at ``path``; one line, not a traceback, for a
+    file that is missing, empty, truncated or corrupt, or not an NPZ file at all."""
+    require(Path(path).is_file(), "--observed", source,
+            "must be an NPZ take (springsim run writes one) that exists")
+    try:
+        if zipfile.is_zipfile(path):   # NumPy reads an array without checking its CRC
+            with zipfile.ZipFile(path) as archive:
+                damaged = archive.testzip()
+            require(damaged is None, "--observed", source, f"is a corrupt NPZ take: its "
+                    f"{damaged!r} fails its checksum (a damaged copy? record it again)")
+        loaded = np.load(path, allow_pickle=False)
+        if isinstance(loaded, np.lib.npyio.NpzFile):
+            with loaded:
+                return {key: loaded[key] for key in ("time", "positions", "fps") if key in loaded}
+    except SceneError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as error:
+        raise SceneError("--observed", source, "is not an NPZ take (springsim run writes one): "
+                         + (str(error) or type(error).__name__)) from None
+    raise SceneError("--observed", source, "is an .npy array, not an NPZ take (springsim run "
+                     "writes one)")
+
+
 class ObservedTake:
     def __init__(self, path_or_arrays):
         self.source = str(path_or_arrays) if not isinstance(path_or_arrays, dict) else "take"
         if isinstance(path_or_arrays, dict):
             arrays = path_or_arrays
         else:
-            require(Path(path_or_arrays).is_file(), "--observed", self.source,
-                    "must be an NPZ take (springsim run writes one) that exists")
-            try:
-                with np.load(path_or_arrays) as file:
-                    arrays = {key: file[key] for key in ("time", "positions") if key in file}
-            except (OSError, ValueError) as error:
-                raise SceneError("--observed", self.source, f"is not an NPZ take: {error}")
+            arrays = read_take(path_or_arrays, self.source)
         require("time" in arrays and "positions" in arrays, "--observed", self.source,
                 "must hold 'time' (F,) and 'positions' (F, P, 3), as springsim run writes")
+        # the frame rate `run` recorded at, where the take says it: the time base a --dt that
+        # rounds a frame's step is read against (commands/run.on_frames)
+        fps = np.asarray(arrays.get("fps", np.nan), float)
+        self.fps = float(fps) if fps.shape == () and np.isfinite(fps) and fps > 0 else None
+        require(all(np.asarray(arrays[key]).dtype.kind in "biuf" for key in ("time", "positions")),
+                "--observed", self.source, "must hold numbers in 'time' and 'positions'")
         self.time = np.asarray(arrays["time"], float)
         self.positions = np.asarray(arrays["positions"], float)
         require(self.positions.ndim == 3 and self.positions.shape[2] == 3
@@ -60,6 +86,9 @@ class ObservedTake:
                 "--observed", self.source, "must have positions (F, P, 3) for its F times")
         require(np.all(np.isfinite(self.positions)) and np.all(np.isfinite(self.time)),
                 "--observed", self.source, "holds NaN or infinite values")
+        require(np.all(self.time >= 0), "--observed", self.source, f"has the time "
+                f"{float(np.min(self.time))!r} s: the run starts at 0 s, so a frame's time must "
+                "be >= 0 s")
 
     def check(self, model, duration, dt):
         count = model.particle_count
@@ -83,27 +112,44 @@ class MarkerTracks:
         require(match in ("nearest", "index"), "--match", match, "must be nearest or index")
         self.source, self.match, self.match_distance = str(path), match, match_distance
         require(Path(path).is_file(), "--observed", self.source, "must be a CSV file that exists")
+        try:
+            rows = self._rows(path)
+        except UnicodeDecodeError:
+            raise SceneError("--observed", self.source, "is not a text file (not UTF-8): give a "
+                             "CSV of time,marker,x,y,z rows") from None
+        except csv.Error as error:
+            raise SceneError("--observed", self.source, f"is not a CSV file ({error}): give "
+                             "time,marker,x,y,z rows") from None
+        require(len(rows) > 0, "--observed", self.source, "has no observations")
+        self.time = np.array([r[0] for r in rows])
+        self.marker = [r[1] for r in rows]
+        self.observed = np.array([r[2:] for r in rows])
+
+    def _rows(self, path) -> list:
+        """(time, marker, x, y, z) of every row, each checked."""
         rows = []
-        with open(path, newline="") as file:
+        with open(path, newline="", encoding="utf-8") as file:
             reader = csv.reader(file)
             header = [cell.strip().lower() for cell in next(reader, [])]
             require(header[:5] == ["time", "marker", "x", "y", "z"], "--observed", self.source,
                     "must start with the header time,marker,x,y,z")
             for number, row in enumerate(reader, start=2):
-                if not row:
-                    continue
-                try:
-                    t, marker, x, y, z = float(row[0]), row[1].strip(), *map(float, row[2:5])
-                except (ValueError, IndexError):
-                    raise SceneError("--observed", f"{self.source} line {number}", "must be "
-                                     "time,marker,x,y,z with numbers for time, x, y, z") from None
-                require(all(math.isfinite(c) for c in (t, x, y, z)), "--observed",
-                        f"{self.source} line {number}", "holds NaN or infinite values")
-                rows.append((t, marker, x, y, z))
-        require(len(rows) > 0, "--observed", self.source, "has no observations")
-        self.time = np.array([r[0] for r in rows])
-        self.marker = [r[1] for r in rows]
-        self.observed = np.array([r[2:] for r in rows])
+                if row:
+                    rows.append(self._row(row, f"{self.source} line {number}"))
+        return rows
+
+    @staticmethod
+    def _row(row, where: str) -> tuple:
+        try:
+            t, marker, x, y, z = float(row[0]), row[1].strip(), *map(float, row[2:5])
+        except (ValueError, IndexError):
+            raise SceneError("--observed", where, "must be time,marker,x,y,z with numbers for "
+                             "time, x, y, z") from None
+        require(all(math.isfinite(c) for c in (t, x, y, z)), "--observed", where,
+                "holds NaN or infinite values")
+        require(t >= 0, "--observed", where, f"has the time {t!r} s: the run starts at 0 s, so "
+                "an observation's time must be >= 0 s")
+        return t, marker, x, y, z
 
     def check(self, model, duration, dt):
         names = list(dict.fromkeys(self.marker))
@@ -162,24 +208,39 @@ class FunctionLoss:
     def __call__(self, frames):
         answer = self.function(frames)
         if isinstance(answer, tuple):
+            require(len(answer) == 2, "loss", f"a tuple of {len(answer)}",
+                    "must return a number, or (value, gradient)")
             value, grad = answer
+            require(np.asarray(grad).dtype.kind in "biuf", "loss",
+                    f"a gradient of {type(grad).__name__}",
+                    f"must be an array of numbers of the positions' shape {frames.shape}")
             grad = np.asarray(grad, float)
             require(grad.shape == frames.shape, "loss", f"a gradient of shape {grad.shape}",
                     f"must have the positions' shape {frames.shape}")
-            return float(value), grad
-        value = float(answer)
+            return loss_value(value), grad
+        value = loss_value(answer)
         grad = np.zeros_like(frames)
         flat, out = frames.reshape(-1), grad.reshape(-1)
         for k in range(flat.size):   # central differences of the loss's own inputs only
             step = 1e-6 * max(1.0, abs(flat[k]))
             keep = flat[k]
             flat[k] = keep + step
-            plus = float(self.function(frames))
+            plus = loss_value(self.function(frames))
             flat[k] = keep - step
-            minus = float(self.function(frames))
+            minus = loss_value(self.function(frames))
             flat[k] = keep
             out[k] = (plus - minus) / (2 * step)
         return value, grad
+
+
+def loss_value(value) -> float:
+    """A loss function's value as a float: a real number (a Python or NumPy scalar, or a 0-d
+    array), never a string that float() would read."""
+    number = np.asarray(value) if not isinstance(value, (str, bytes)) else None
+    require(number is not None and number.shape == () and number.dtype.kind in "iuf", "loss",
+            value if len(repr(value)) <= 40 else f"a {type(value).__name__}",
+            "must return a real number (the loss), or (value, gradient)")
+    return float(number)
 
 
 def as_loss(loss, fps=None):
