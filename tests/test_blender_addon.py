@@ -473,3 +473,47 @@ def test_simulate_never_imports_springsim_numba_or_scipy_into_blender(interface)
     for modules in (result["before"], result["after"], result["after_free_modules"]):
         assert "springsim_blender.runner" in modules
         assert [name for name in modules if not name.startswith("springsim_blender")] == []
+
+
+# --- the tutorial's script, as a user runs it ----------------------------------------------------
+
+def tutorial_script() -> str:
+    """The script of docs/tutorials/blender.md that a user runs in Blender (its hanging.py)."""
+    from test_docs_examples import blocks
+
+    scripts = [block.code for block in blocks(HERE.parent / "docs" / "tutorials" / "blender.md")
+               if block.file == "hanging.py"]
+    assert len(scripts) == 1
+    return scripts[0]
+
+
+def test_the_tutorials_script_runs_as_written_with_the_extension_installed_from_its_zip(
+        tmp_path):
+    """Not the test suite's way (import springsim_blender from the checkout, register()), but the
+    user's: `springsim blender-addon`, Install from Disk (here its operator), then the script's
+    text exactly as the page shows it, in a Blender whose user folder is fresh."""
+    zip_path = tmp_path / "springsim.zip"
+    assert main(["blender-addon", str(zip_path), "--quiet"]) == 0
+    (tmp_path / "hanging.py").write_text(tutorial_script())
+    code = ("import json, os, sys, bpy; "
+            "bpy.ops.extensions.package_install_files(filepath=sys.argv[1], "
+            "repo='user_default', enable_on_install=True); "
+            "exec(compile(open('hanging.py').read(), 'hanging.py', 'exec'), {}); "
+            "print(json.dumps(sorted(m for m in sys.modules if 'springsim' in m)), flush=True); "
+            "os._exit(0)")
+    environment = {key: value for key, value in os.environ.items()
+                   if key not in ("PYTHONPATH", "SPRINGSIM_PYTHON")}
+    done = subprocess.run([sys.executable, "-c", code, str(zip_path)], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=600,
+                          env={**environment, "HOME": str(tmp_path)})
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "Traceback" not in done.stderr, done.stderr[-3000:]
+    printed = done.stdout.strip().splitlines()
+    assert printed[:2] == ["springsim: simulated 24 frames", "['MESH_CACHE']"], done.stdout
+    modules = json.loads(printed[-1])
+    # the installed extension ran, not the checkout's package
+    assert "bl_ext.user_default.springsim_blender" in modules
+    assert "springsim_blender" not in modules
+    assert (tmp_path / "hanging" / "scene.toml").is_file()
+    assert main(["run", str(tmp_path / "hanging" / "scene.toml"), "--fps", "24", "--quiet",
+                 "--out", str(tmp_path / "take.npz")]) == 0

@@ -230,6 +230,43 @@ def test_cli_reference_lists_every_option_of_every_command():
                 assert f"`{action.metavar or action.dest}`" in section, (name, action.dest)
 
 
+def test_the_command_line_guide_has_a_row_for_every_command():
+    from springsim.cli import build_parser
+
+    text = (ROOT / "docs" / "guide" / "command-line.md").read_text()
+    table = set(re.findall(r"^\| `springsim ([\w-]+)", text, re.M))
+    assert set(hook.subcommands(build_parser())) <= table, \
+        sorted(set(hook.subcommands(build_parser())) - table)
+
+
+# --- generated pages kept in the repository, and links that work in a clone ---------------------
+
+@pytest.mark.parametrize("uri", hook.COMMITTED)
+def test_the_committed_reference_is_what_the_code_generates(uri):
+    committed = (ROOT / "docs" / uri).read_text(encoding="utf-8")
+    assert committed == hook.GENERATED[uri](), (
+        f"docs/{uri} is out of date: run `.venv/bin/python docs/hooks/reference.py`")
+
+
+def test_every_relative_link_of_the_docs_names_a_file_of_the_clone():
+    """Read in the clone (GitHub, an editor), a page's links must lead somewhere: every
+    relative link of README.md and docs/ names a file that exists (the site's build checks the
+    same for the site)."""
+    generated_only = set(hook.GENERATED) - set(hook.COMMITTED)
+    dead = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        text = re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"), flags=re.S)
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"^[a-z]+:|^#", target):
+                continue                                    # a web address, an anchor
+            path = (page.parent / target.split("#")[0]).resolve()
+            site_page = path.relative_to(ROOT / "docs").as_posix() \
+                if path.is_relative_to(ROOT / "docs") else ""
+            if not path.exists() and site_page not in generated_only:
+                dead.append(f"{page.relative_to(ROOT)}: {target}")
+    assert dead == []
+
+
 # --- version, changelog, README -------------------------------------------------------------------
 
 def test_version_is_the_package_version_and_the_changelog_top_release():

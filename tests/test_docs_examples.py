@@ -7,7 +7,8 @@ Conventions (the README and every page of docs/ follow them):
 - every fenced block names its language: ``bash`` and ``python`` blocks are examples and run,
   top to bottom, in one empty folder per page; ``text`` is output shown, not run; ``toml`` is a
   scene file, parsed (and written to a file when ``<!-- file: NAME -->`` stands just before it,
-  for the blocks after it to use);
+  for the blocks after it to use); a ``python`` block after ``<!-- file: NAME -->`` is a script
+  shown whole for another program to run (Blender), written to that file and not run itself;
 - a ``text`` block whose first line is ``$ COMMAND`` is a transcript: the command runs and must
   print the rest of the block (line breaks aside, so a long line may be wrapped);
 - ``<!-- no-run: REASON -->`` just before a block leaves it out (long-running or interactive
@@ -108,6 +109,9 @@ def run_page(path: Path, folder: Path, timeout: float = 600) -> list[Block]:
             f"{block.label()}: a fenced block must say its language, one of {sorted(KNOWN)}")
         if block.language == "toml":
             tomllib.loads(block.code)   # a scene file or a piece of one: valid TOML at least
+        elif block.language == "python" and block.file:
+            compile(block.code, block.file, "exec")     # a script for another program: valid
+        if block.file or block.language == "toml":
             if block.file:
                 (folder / block.file).write_text(block.code, encoding="utf-8")
             continue
@@ -143,12 +147,48 @@ PAGES = ["README.md", "docs/getting-started.md", "docs/guide/command-line.md",
                  for path in (ROOT / "docs" / "tutorials").glob("*.md"))]
 
 
-@pytest.mark.parametrize("page", PAGES)
+NEEDS_BLENDER = {"docs/tutorials/blender.md"}    # its scripts run in bpy, Blender as a module
+
+
+@pytest.mark.parametrize("page", [pytest.param(page, marks=pytest.mark.external)
+                                  if page in NEEDS_BLENDER else page for page in PAGES])
 def test_page_examples_run(page, tmp_path):
     ran = run_page(ROOT / page, tmp_path)
     assert ran, f"{page} has no runnable example"
     if page == "README.md":
         check_recording_is_documented(tmp_path / "jelly-balls.npz")
+        check_sweep_rows_differ(tmp_path / "sweep" / "results.csv")
+    if page == "docs/getting-started.md":
+        check_runs_differ(tmp_path / "soft_bowl.npz", tmp_path / "sticky.npz")
+
+
+def check_runs_differ(*recordings: Path, by: float = 0.01):
+    """Runs that an example varies show the effect they are about: their last frames' centres
+    differ by more than ``by`` m (a run that ends before the body reaches what the varied key
+    acts on gives the same frames)."""
+    centres = []
+    for path in recordings:
+        with np.load(path) as arrays:
+            centres.append(arrays["positions"][-1].mean(axis=0))
+    for a in range(len(centres)):
+        for b in range(a):
+            assert np.abs(centres[a] - centres[b]).max() > by, (recordings[a], recordings[b])
+
+
+def check_sweep_rows_differ(table: Path, by: float = 1e-3):
+    """Every two rows of a sweep's results differ, by a relative ``by`` at least in one result
+    (the timings aside)."""
+    import csv
+
+    from springsim.sweeps.run import RESULTS
+
+    with table.open() as file:
+        rows = [[float(row[column]) for column in RESULTS] for row in csv.DictReader(file)]
+    rows = np.array(rows)
+    for a in range(len(rows)):
+        for b in range(a):
+            scale = np.abs(rows[a]) + np.abs(rows[b]) + 1e-12
+            assert (np.abs(rows[a] - rows[b]) / scale).max() > by, (a, b, rows[a], rows[b])
 
 
 def check_recording_is_documented(recording: Path):

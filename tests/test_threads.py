@@ -25,17 +25,20 @@ def large_cube():
     return simulation
 
 
+@pytest.mark.slow   # the 51^3 cube and its threaded kernel
 def test_the_large_cube_is_cut_into_partitions(large_cube):
     assert large_cube.model.particle_count >= 2 * PARTITION
     assert partition_count(large_cube.model.particle_count) == 2
 
 
+@pytest.mark.slow   # the 51^3 cube and its threaded kernel
 def test_partitioned_spring_forces_match_the_reference(large_cube):
     x, v = large_cube.state.positions, large_cube.state.velocities
     expected = reference_forces(large_cube.model, x, v)
     assert np.allclose(forces(large_cube.model.arrays, x, v), expected, rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow   # the 51^3 cube and its threaded kernel
 def test_steps_are_bit_identical_for_any_number_of_threads(large_cube):
     start = large_cube.state.copy()
     results = []
@@ -56,6 +59,7 @@ def test_a_bad_thread_count_is_refused_before_any_work(threads):
         Simulation(load_scene("jelly-plane"), threads=threads)
 
 
+@pytest.mark.slow   # the 51^3 cube and its threaded kernel
 def test_terrain_contact_is_bit_identical_for_any_number_of_threads(large_cube):
     """With the lower half of the cube pushed through the plane y = -1 and falling, the steps
     (contact in the force evaluation, impacts after each step) agree bit for bit, and each ends
@@ -82,6 +86,7 @@ def test_terrain_contact_is_bit_identical_for_any_number_of_threads(large_cube):
     assert (positions[:, 1] < -1.0).sum() > simulation.model.particle_count // 3
 
 
+@pytest.mark.slow   # the 51^3 cube and its threaded kernel
 @pytest.mark.parametrize("threads", sorted({1, min(2, available_threads())}))
 def test_the_first_diverged_particle_is_the_smallest_whatever_the_threads(large_cube, threads):
     """The divergence check runs in DIVERGENCE_CHUNKS fixed pieces, on threads: with particles

@@ -18,7 +18,10 @@ pins the vertex nearest each corner of the mesh's bounding box in its x-z plane,
 (``"edge"``) the vertices on the box's +z face, and so on. A vertex in no face holds still.
 
 ``material`` (bodies/cloth_material.py) replaces ``particle_mass`` and the per-kind ``ks``/``kd``
-by a density and stiffnesses per unit strain, for grid and mesh cloth alike; ``pins``
+by a density and stiffnesses per unit strain, for grid and mesh cloth alike. A cloth from a
+``file`` with neither ``material`` nor ``particle_mass`` is of the default material (a heavy
+cotton's 0.3 kg/m², its mass shared by vertex area): the course's 1 kg a particle is the grid's,
+whose spacing it was chosen for, and would make a 900-vertex napkin weigh 900 kg. ``pins``
 (bodies/pins.py) add pinned particles by number, box or mesh group to those ``pinned`` names.
 """
 import functools
@@ -48,6 +51,7 @@ EDGES = {"edge+z": (-1, slice(None)), "edge-z": (0, slice(None)),
          "edge+x": (slice(None), -1), "edge-x": (slice(None), 0)}
 PINNINGS = ("corners", "none", "edge", *EDGES)
 REFERENCE_DRAG = 3.4e-4  # N s/m per particle: a = g - v c / m, as in the reference
+GRID_PARTICLE_MASS = 1.0  # kg: the reference's, for the grid when particle_mass is unset
 
 
 def _default_springs():
@@ -61,7 +65,8 @@ class Cloth(SurfaceContact):
     particles_per_edge: int = 25
     width: float = 4.0                     # along the local x axis
     height: float = 4.0                    # along the local z axis
-    particle_mass: float = 1.0
+    particle_mass: float | None = None     # kg; unset: GRID_PARTICLE_MASS, or with a file the
+                                           # default material (module doc)
     position: tuple = (0.0, 0.0, 0.0)      # centre of the sheet
     velocity: tuple = (0.0, 0.0, 0.0)
     rotation_degrees: float = 0.0
@@ -81,9 +86,9 @@ class Cloth(SurfaceContact):
 
     def validate(self, key: str) -> None:
         self._validate_shape(key)
-        for name in ("particle_mass",):
-            value = getattr(self, name)
-            require(_positive(value), f"{key}.{name}", value, "must be > 0 kg")
+        if self.particle_mass is not None:
+            require(_positive(self.particle_mass), f"{key}.particle_mass", self.particle_mass,
+                    "must be > 0 kg")
         require(is_finite(self.drag) and self.drag >= 0, f"{key}.drag", self.drag,
                 "must be >= 0 N s/m")
         for name in ("position", "velocity", "rotation_axis"):
@@ -102,6 +107,8 @@ class Cloth(SurfaceContact):
             pin.validate(f"{key}.pins.{p}")
         if self.pins:
             pinned_mask(self.pins, self.particle_positions(), self._groups(), f"{key}.pins")
+            moving_pins(self.pins, self.particle_positions(), self._groups(), self._cache_points,
+                        f"{key}.pins")
         self.validate_surface_contact(key)
 
     def _validate_shape(self, key: str) -> None:
@@ -162,12 +169,13 @@ class Cloth(SurfaceContact):
         faces = self.faces()
         springs, kinds = self._springs(faces, len(positions))
         count = len(positions)
-        masses = np.full(count, float(self.particle_mass))
+        masses = np.full(count, self.mass_per_particle())
         constants = None
-        if self.material is not None:
-            masses = lumped_masses(self.rest_positions(), faces, self.material.density)
-            constants = material_constants(self.material, self.rest_positions(), faces,
-                                           springs, kinds)
+        material = self.effective_material()
+        if material is not None:
+            masses = lumped_masses(self.rest_positions(), faces, material.density)
+            constants = material_constants(material, self.rest_positions(), faces, springs,
+                                           kinds)
         pinned = self.pinned_mask()
         moving = []
         if self.pins:
@@ -175,7 +183,7 @@ class Cloth(SurfaceContact):
             moving = moving_pins(self.pins, positions, self._groups(), self._cache_points)
         in_no_face = np.bincount(faces[faces >= 0], minlength=count) == 0
         pinned |= in_no_face             # it has no spring to move with
-        masses[in_no_face] = float(self.particle_mass)
+        masses[in_no_face] = self.mass_per_particle()
         triangles = fan_triangles(faces).astype(np.int32)
         surface, embedding, collision_surface = triangles, None, None
         if self.file and self._has_seams():
@@ -205,9 +213,10 @@ class Cloth(SurfaceContact):
                                              (SpringKind.SHEAR, SHEAR_OFFSETS),
                                              (SpringKind.BEND, BEND_OFFSETS))}
         springs, kinds = [], []
+        material = self.effective_material()
         for kind, pairs in by_kind.items():
-            if self.material is not None:
-                builds = any(self.material.per_kind(kind))
+            if material is not None:
+                builds = any(material.per_kind(kind))
             else:
                 builds = getattr(self, SpringKind(kind).label).builds
             if builds and len(pairs):
@@ -216,6 +225,17 @@ class Cloth(SurfaceContact):
         if not springs:
             return np.empty((0, 2), np.int32), np.empty(0, np.int8)
         return np.concatenate(springs), np.concatenate(kinds)
+
+    def effective_material(self) -> ClothMaterial | None:
+        """``material``; for a file cloth that sets neither it nor ``particle_mass``, the
+        default material (module doc); None: per-particle masses and per-kind springs."""
+        if self.material is None and self.file and self.particle_mass is None:
+            return ClothMaterial()
+        return self.material
+
+    def mass_per_particle(self) -> float:
+        """kg of each particle without a material (and of a vertex in no face)."""
+        return GRID_PARTICLE_MASS if self.particle_mass is None else float(self.particle_mass)
 
     def faces(self) -> np.ndarray:
         """(F, K) the sheet's faces as rows of particle numbers (the grid's cells as quads)."""
@@ -275,15 +295,15 @@ class Cloth(SurfaceContact):
         status = path.stat()
         return _cached_sheet(str(path), status.st_mtime_ns, status.st_size)
 
-    def _cache_points(self, points: np.ndarray, key: str) -> np.ndarray:
+    def _cache_points(self, points: np.ndarray, key: str, file: str) -> np.ndarray:
         """A pin animation's samples (F, V, 3) as the particles (F, P, 3): a grid's particles
         as they are; a file's vertices placed as the cloth is, each particle taking its first
         file vertex."""
         if not self.file:
-            return particle_cache(self.particles_per_edge ** 2)(points, key)
+            return particle_cache(self.particles_per_edge ** 2)(points, key, file)
         count = self._file_vertex_count(key)
-        require(points.shape[1] == count, f"{key}.file", points.shape[1],
-                f"points in the cache, but the cloth's file has {count} vertices")
+        require(points.shape[1] == count, f"{key}.file", file,
+                f"moves {points.shape[1]} points, but the cloth's file has {count} vertices")
         first = first_file_vertex(self.sheet().of_file_vertex)
         return np.stack([placed(_as_triangle_mesh(frame[first]), self.scale,
                                 self.rotation_degrees, self.rotation_axis,
