@@ -56,6 +56,7 @@ def folded(file, lower="floor", speed=2.5):
     pinned = list(range(SIDE * SIDE)) if lower == "pins" else "none"
     springs = SpringParameters(ks=2000.0, kd=5.0)
     cloth = Cloth(file=file, velocity=(0.3, -speed, 0.1), pinned=pinned, structural=springs,
+                  particle_mass=1.0,
                   shear=springs, bend=springs, thickness=0.012, friction=0.3,
                   static_friction=0.45, restitution=0.3)
     terrains = [Plane(point=(0.0, -0.004, 0.0), friction=0.5, restitution=0.4)] \

@@ -315,13 +315,18 @@ def test_one_step_a_call_is_bit_identical_to_one_call_and_keeps_the_pair_list(in
     whole.dt = single.dt = dt
     start = single.state.copy()
     whole.step(steps)
-    searched_at = set()
+    searches, found_at = 0, single.state.pairs.found_at.copy()
     for _ in range(steps):
         single.step(1)
-        searched_at.add(id(single.state.pairs.found_at))
+        searches += not np.array_equal(single.state.pairs.found_at, found_at, equal_nan=True)
+        found_at = single.state.pairs.found_at.copy()
     assert np.array_equal(single.positions, whole.positions)
     assert np.array_equal(single.velocities, whole.velocities)
-    assert len(searched_at) < steps / 10   # the list was kept between most calls
+    if integrator == "rk4":   # the list was kept between most calls
+        # (counted by what it was found at: the array's id, counted before, was reused by
+        # the allocator; backward Euler's steps of 1/60 s carry the falling cubes out of the
+        # list's reach at nearly every step, one call or many)
+        assert searches < steps / 10
     kept = single.state.pairs
     single.state = start
     single.step(steps)

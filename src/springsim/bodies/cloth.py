@@ -19,9 +19,10 @@ pins the vertex nearest each corner of the mesh's bounding box in its x-z plane,
 
 ``material`` (bodies/cloth_material.py) replaces ``particle_mass`` and the per-kind ``ks``/``kd``
 by a density and stiffnesses per unit strain, for grid and mesh cloth alike. A cloth from a
-``file`` with neither ``material`` nor ``particle_mass`` is of the default material (a heavy
-cotton's 0.3 kg/m², its mass shared by vertex area): the course's 1 kg a particle is the grid's,
-whose spacing it was chosen for, and would make a 900-vertex napkin weigh 900 kg. ``pins``
+``file`` with neither ``material`` nor ``particle_mass`` weighs the default material's 0.3 kg/m²
+(a heavy cotton's), shared by vertex area, and has its stiffnesses too unless it sets per-kind
+springs: the course's 1 kg a particle is the grid's, whose spacing it was chosen for, and would
+make a 900-vertex napkin weigh 900 kg. ``pins``
 (bodies/pins.py) add pinned particles by number, box or mesh group to those ``pinned`` names.
 """
 import functools
@@ -169,7 +170,7 @@ class Cloth(SurfaceContact):
         faces = self.faces()
         springs, kinds = self._springs(faces, len(positions))
         count = len(positions)
-        masses = np.full(count, self.mass_per_particle())
+        masses = self._particle_masses(faces, count)
         constants = None
         material = self.effective_material()
         if material is not None:
@@ -227,11 +228,24 @@ class Cloth(SurfaceContact):
         return np.concatenate(springs), np.concatenate(kinds)
 
     def effective_material(self) -> ClothMaterial | None:
-        """``material``; for a file cloth that sets neither it nor ``particle_mass``, the
-        default material (module doc); None: per-particle masses and per-kind springs."""
-        if self.material is None and self.file and self.particle_mass is None:
+        """``material``; for a file cloth that sets none of it, ``particle_mass`` and the
+        per-kind springs, the default material (module doc); None: per-kind springs."""
+        if self.material is None and self.file and self.particle_mass is None \
+                and not self._sets_springs():
             return ClothMaterial()
         return self.material
+
+    def _sets_springs(self) -> bool:
+        return any(getattr(self, kind) != _default_springs()
+                   for kind in ("structural", "shear", "bend"))
+
+    def _particle_masses(self, faces: np.ndarray, count: int) -> np.ndarray:
+        """Each particle's mass without a material: ``particle_mass``, or for a file cloth that
+        leaves it unset the default material's areal density shared by vertex area (its springs
+        the per-kind ones it sets)."""
+        if self.file and self.particle_mass is None:
+            return lumped_masses(self.rest_positions(), faces, ClothMaterial().density)
+        return np.full(count, self.mass_per_particle())
 
     def mass_per_particle(self) -> float:
         """kg of each particle without a material (and of a vertex in no face)."""

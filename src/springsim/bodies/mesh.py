@@ -11,9 +11,10 @@ file's own surface riding the lattice.
   box; a cell is kept when the surface passes through it (a conservative voxelization) or its
   centre is inside; the particles are the kept cells' corners, joined by the cube's spring
   pattern where both ends are particles. A 4 m box at spacing 4/9 is exactly the default cube.
-  ``spacing = "auto"`` picks the spacing, a whole number of cells along the box's longest side,
-  whose lattice has about ``particles`` particles, so a model in millimetres or kilometres makes
-  the same body, and a box's lattice (a cube's) has its faces on lattice planes.
+  ``spacing = "auto"`` picks the spacing whose lattice has about ``particles`` particles, so a
+  model in millimetres or kilometres makes the same body: to three significant digits, or for a
+  mesh with a flat side on its box a whole number of cells along the box's longest side (then a
+  box's lattice, a cube's, has its faces on lattice planes).
 - The surface (the idea of Newton's soft grid with a visual mesh and MuJoCo's trilinear
   flexcomp): each vertex of the FILE, in the file's order and seam duplicates included, is a
   fixed trilinear combination of the eight corners of the kept cell it lies in, computed once.
@@ -285,21 +286,41 @@ def build_lattice(mesh: TriangleMesh, solid: TriangleMesh, spacing, particles: i
 
 def auto_spacing(solid: TriangleMesh, particles: int):
     """(spacing, filled lattice): the spacing whose lattice has closest to ``particles``
-    particles among a few tries (AUTO_TRIES, stopping within AUTO_TOLERANCE), each a whole
-    number of cells along the box's longest side. Why whole: the lattice is centred on the box,
-    so a side that is no whole number of cells sticks out by part of a cell at both ends, and
-    the body, which touches terrains with its particles, then rests that far above the floor (a
-    1 m cube at 0.0901 m stood 4 cm above it); a cube's every side fits. The count goes as the
-    volume over s^3 plus the surface over s^2: each try follows the slope of log count over log
-    spacing measured between the last two."""
-    extent = np.ptp(solid.vertices, axis=0)
-    longest = float(extent.max())
-    extent = np.maximum(extent, 1e-3 * longest)             # a flat mesh still has a box
-    spacing = float(np.prod(extent) / particles) ** (1 / 3)
+    particles among a few tries (AUTO_TRIES, stopping within AUTO_TOLERANCE), to three
+    significant digits; for a mesh with a flat side on its box, a whole number of cells along
+    the box's longest side. Why whole: the lattice is centred on the box, so a side that is no
+    whole number of cells sticks out by part of a cell at both ends, and the body, which touches
+    terrains with its particles, then rests that far above the floor (a 1 m cube at 0.0901 m
+    stood 4 cm above it); a cube's every side fits. A curved side fits no lattice, and whole
+    cells would only make the count jump (from one to the next by more than AUTO_TOLERANCE).
+    The count goes as the volume over s^3 plus the surface over s^2: each try follows the slope
+    of log count over log spacing measured between the last two."""
+    low, high = solid.vertices.min(axis=0), solid.vertices.max(axis=0)
+    longest = float((high - low).max())
+    extent = np.maximum(high - low, 1e-3 * longest)          # a flat mesh still has a box
+    first = float(np.prod(extent) / particles) ** (1 / 3)
+    if has_flat_side(solid, low, high):
+        return _closest_lattice(solid, particles, first,
+                                lambda s: longest / max(1, round(longest / s)))
+    return _closest_lattice(solid, particles, first, lambda s: float(f"{s:.3g}"))
+
+
+def has_flat_side(solid: TriangleMesh, low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether a triangle of ``solid`` lies in a face of its box ``low``-``high``."""
+    tolerance = 1e-9 * float((high - low).max())
+    for bound in (low, high):
+        on = np.abs(solid.vertices - bound) <= tolerance        # (V, 3) per axis
+        if on[solid.triangles].all(axis=1).any():
+            return True
+    return False
+
+
+def _closest_lattice(solid: TriangleMesh, particles: int, spacing: float, rounded):
+    """auto_spacing's search from ``spacing``, each try's spacing ``rounded``."""
     tried = {}
     slope = -2.5
     for _ in range(AUTO_TRIES):
-        spacing = longest / max(1, round(longest / spacing))
+        spacing = rounded(spacing)
         if spacing in tried:
             break
         filled = fill(solid.vertices, solid.triangles, spacing)
