@@ -41,6 +41,7 @@ def mkdocs_build(config_dir: Path, site: Path, tmp_path: Path):
 
 # --- the site ----------------------------------------------------------------------------------
 
+@pytest.mark.slow   # a whole MkDocs build
 def test_site_builds_strict(tmp_path):
     pytest.importorskip("mkdocs", reason="the docs extra (./test.sh installs it)")
     done = mkdocs_build(ROOT, tmp_path / "site", tmp_path)
@@ -54,6 +55,7 @@ def test_site_builds_strict(tmp_path):
         assert (site / "images" / f"gallery-{name}.gif").is_file(), name
 
 
+@pytest.mark.slow   # a whole MkDocs build
 def test_strict_build_fails_on_a_broken_link(tmp_path):
     """The configuration really is strict: a page linking to a missing page stops the build
     (so the passing build above means every link and reference resolves)."""

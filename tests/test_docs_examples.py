@@ -150,6 +150,8 @@ PAGES = ["README.md", "docs/getting-started.md", "docs/guide/command-line.md",
 NEEDS_BLENDER = {"docs/tutorials/blender.md"}    # its scripts run in bpy, Blender as a module
 
 
+# the slow tier: each page's commands run as a user types them (49 processes, minutes)
+@pytest.mark.slow
 @pytest.mark.parametrize("page", [pytest.param(page, marks=pytest.mark.external)
                                   if page in NEEDS_BLENDER else page for page in PAGES])
 def test_page_examples_run(page, tmp_path):

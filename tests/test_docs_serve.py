@@ -10,6 +10,7 @@ import pytest
 from test_docs_examples import environment
 
 
+@pytest.mark.slow   # builds the site, then serves it
 def test_docs_serves_the_built_site(tmp_path):
     pytest.importorskip("mkdocs", reason="the docs extra (./test.sh installs it)")
     site = tmp_path / "site"

@@ -14,6 +14,8 @@ import springsim
 from springsim.terrains.deforming_mesh import surface_at
 
 
+pytestmark = pytest.mark.slow   # the built-in moving scenes run for seconds of simulated time
+
 def test_the_cape_lies_on_the_walking_figure_without_entering_it():
     """Laid over the shoulders, the cape falls onto them and down the back and rides there: from
     half a second on, hundreds of its particles lie within the contact band of the figure, none
