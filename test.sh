@@ -42,4 +42,4 @@ sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_na
     .venv/bin/springsim warmup --variants serial keeping
     [ -z "$threaded" ] || .venv/bin/springsim warmup --integrators $threaded --variants threaded
 fi
-exec .venv/bin/python -m pytest "${workers[@]}" "$@"
+exec .venv/bin/python -m pytest ${workers[@]+"${workers[@]}"} "$@"

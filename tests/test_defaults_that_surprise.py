@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import springsim
+from springsim import load_scene
 from springsim.bodies.cloth import Cloth
 from springsim.bodies.cloth_material import ClothMaterial
 from springsim.bodies.mesh import MeshBody
@@ -54,6 +55,12 @@ def test_a_cloth_from_a_file_with_particle_mass_is_the_courses_cloth(tmp_path):
     built = Cloth(file=str(napkin_obj(tmp_path / "napkin.obj")), pinned="none",
                   particle_mass=0.01).build()
     assert np.all(built.masses == 0.01) and built.spring_constants is None
+
+
+def test_the_grid_cloths_mass_is_a_number_that_gradients_take():
+    from springsim.gradients.parameters import SceneValue
+
+    assert SceneValue.named(load_scene("cloth-hang"), "bodies.0.particle_mass").value == 1.0
 
 
 def test_the_grid_cloth_keeps_the_courses_kilogram_a_particle():

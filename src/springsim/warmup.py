@@ -30,8 +30,8 @@ def is_compiled(call) -> bool:
         cache = kernel._cache
         key = cache._index_key(types, kernel.targetctx.codegen())
         return key in cache._cache_file._load_index()
-    except (AttributeError, OSError, EOFError, ValueError):
-        return False   # a cache this Numba lays out otherwise: not known to be compiled
+    except Exception:   # a probe: a cache laid out otherwise, or a damaged index (pickle's
+        return False     # errors): not known to be compiled, so compiled again
 
 
 def variant_calls(integrator: str, variants=None) -> dict:

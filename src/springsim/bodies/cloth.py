@@ -85,6 +85,12 @@ class Cloth(SurfaceContact):
     material: ClothMaterial | None = None  # unset: particle_mass and per-kind ks, kd
     pins: list[Pin] = field(default_factory=list)   # more pinned particles (bodies/pins.py)
 
+    def __post_init__(self):
+        # the grid's mass is the course's from the start, so that it reads, writes out and
+        # differentiates as a number; a file cloth's stays unset (its material's, module doc)
+        if self.particle_mass is None and not self.file:
+            self.particle_mass = GRID_PARTICLE_MASS
+
     def validate(self, key: str) -> None:
         self._validate_shape(key)
         if self.particle_mass is not None:
