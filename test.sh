@@ -39,7 +39,10 @@ if ! .venv/bin/python -c "import sys; from springsim.warmup import is_warm; \
 from springsim.integrators import integrator_names; \
 sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_names()) \
          and all(is_warm(name, ['threaded']) for name in sys.argv[1:]) else 1)" $threaded; then
-    .venv/bin/springsim warmup --variants serial keeping
-    [ -z "$threaded" ] || .venv/bin/springsim warmup --integrators $threaded --variants threaded
+    setup_stage compiling "compiling the kernels the tests call (springsim warmup; first run only)" \
+        .venv/bin/springsim warmup --variants serial keeping
+    [ -z "$threaded" ] || setup_stage compiling \
+        "compiling explicit Euler's threaded step for the slow tier (first run only)" \
+        .venv/bin/springsim warmup --integrators $threaded --variants threaded
 fi
 exec .venv/bin/python -m pytest ${workers[@]+"${workers[@]}"} "$@"
