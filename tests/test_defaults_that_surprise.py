@@ -51,6 +51,15 @@ def test_a_cloth_from_a_file_weighs_a_fabric_of_its_area_shared_by_vertex_area(t
     assert built.spring_constants is not None
 
 
+def test_a_vertex_in_no_face_of_a_fabric_weighs_as_its_vertices_do_on_average(tmp_path):
+    napkin = napkin_obj(tmp_path / "napkin.obj")
+    with napkin.open("a") as file:
+        file.write("v 5.0 5.0 5.0\n")                 # a stray vertex, in no face
+    built = Cloth(file=str(napkin), pinned="none").build()
+    assert built.pinned[-1]
+    assert built.masses[-1] == pytest.approx(built.masses[:-1].mean(), rel=1e-12)   # not 1 kg
+
+
 def test_a_cloth_from_a_file_with_particle_mass_is_the_courses_cloth(tmp_path):
     built = Cloth(file=str(napkin_obj(tmp_path / "napkin.obj")), pinned="none",
                   particle_mass=0.01).build()

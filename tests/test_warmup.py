@@ -170,6 +170,13 @@ def test_warmup_compiles_the_threaded_variant_so_a_threaded_step_compiles_nothin
     assert not announcer.compiled and log.getvalue() == ""
 
 
+def test_warmup_refuses_variants_with_a_scene_in_one_line(capsys):
+    assert main(["warmup", "--scene", "jelly-plane", "--variants", "threaded"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["springsim warmup: --variants = ['threaded']: goes without --scene (a "
+                   "scene's run takes the variant its model needs)"]
+
+
 def test_warmup_refuses_an_unknown_variant_in_one_line(capsys):
     assert main(["warmup", "--variants", "fast"]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -190,7 +190,7 @@ class Cloth(SurfaceContact):
             moving = moving_pins(self.pins, positions, self._groups(), self._cache_points)
         in_no_face = np.bincount(faces[faces >= 0], minlength=count) == 0
         pinned |= in_no_face             # it has no spring to move with
-        masses[in_no_face] = self.mass_per_particle()
+        masses[in_no_face] = self._stray_mass(masses[~in_no_face])
         triangles = fan_triangles(faces).astype(np.int32)
         surface, embedding, collision_surface = triangles, None, None
         if self.file and self._has_seams():
@@ -252,6 +252,14 @@ class Cloth(SurfaceContact):
         if self.file and self.particle_mass is None:
             return lumped_masses(self.rest_positions(), faces, ClothMaterial().density)
         return np.full(count, self.mass_per_particle())
+
+    def _stray_mass(self, in_faces: np.ndarray) -> float:
+        """The mass of a vertex in no face (held still: no spring moves it): ``particle_mass``
+        where given, else what the vertices in faces weigh on average (not the grid's 1 kg in a
+        cloth of grams)."""
+        if self.particle_mass is not None or len(in_faces) == 0:
+            return self.mass_per_particle()
+        return float(in_faces.mean())
 
     def mass_per_particle(self) -> float:
         """kg of each particle without a material (and of a vertex in no face)."""

@@ -33,6 +33,8 @@ def run(args) -> int:
     for variant in args.variants or ():
         require(variant in VARIANTS, "--variants", variant,
                 "must be one of " + ", ".join(VARIANTS))
+    require(args.scene is None or args.variants is None, "--variants", args.variants,
+            "goes without --scene (a scene's run takes the variant its model needs)")
     if args.scene is not None:
         from ..scenefile import load_scene
 
