@@ -13,9 +13,7 @@ from ._jit import inline_kernel, kernel
 from .collision.response.terrain import apply_contact_forces
 from .spring_runs import COLUMNS, add_run_forces, from_columns, to_columns
 from .springs import spring_force_factor
-from .wind import add_wind_forces
-from .world import add_pin_forces
-from .attachments import add_attachment_forces
+from .terms import add_external_forces
 
 
 @kernel
@@ -76,16 +74,15 @@ threaded_accelerations = inline_kernel(accelerations.py_func)
 
 @inline_kernel
 def free_accelerations(model, x, v, out, columns):
-    """out = dv/dt at (x, v) before terrain contact: springs, dampers, drag and gravity."""
+    """out = dv/dt at (x, v) before terrain contact: springs, dampers, drag, gravity and the
+    terms."""
     spring_forces(model, x, v, columns, out)
     inv_mass, gravity, drag = model.inv_mass, model.gravity, model.drag
     for i in prange(x.shape[0]):
         w = inv_mass[i]
         for c in range(3):
             out[i, c] = w * (out[i, c] - drag[i] * v[i, c]) + (gravity[c] if w > 0.0 else 0.0)
-    add_pin_forces(model, x, v, inv_mass, out)   # soft pins' springs (world.py)
-    add_attachment_forces(model, x, v, inv_mass, out)   # soft attachments (attachments.py)
-    add_wind_forces(model, x, v, inv_mass, out)  # the air (wind.py)
+    add_external_forces(model, x, v, inv_mass, out)   # the terms: soft pins, wind, ... (terms/)
 
 
 @kernel

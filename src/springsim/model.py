@@ -10,13 +10,14 @@ import numpy as np
 
 from .attachments import hold_attachments, pack_attachments
 from .bodies.balls import collision_parameters
+from .clock import SLOTS as CLOCK_SLOTS
 from .collision.shapes.surfaces import surface_contact_arrays
 from .spring_runs import build_spring_runs
 from .springs import SpringKind
 from .surfaces import Embedding
 from .terrains import pack_terrains
 from .wind import pack_wind, quads_both_ways
-from .world import pack_world
+from .world_tables import pack_world
 
 
 class ModelArrays(NamedTuple):
@@ -56,12 +57,11 @@ class ModelArrays(NamedTuple):
     pin_placed: np.ndarray       # (Q, 3) m
     pin_stiffness: np.ndarray    # (Q,) N/m, 0 for a hard pin
     pin_damping: np.ndarray      # (Q,) N s/m
-    # [the time the call starts at, the time of the step (or part of one) being taken, the
-    # time the world was last moved to, the whole step's start, its end, its size] (s): written
-    # by the integrators (Integrator.advance, integrators/_steps.drive, world.start_step) and
+    # the times of clock.py's slots (s): written by the integrators (Integrator.advance,
+    # integrators/_steps.drive, world.start_step) and
     # read by the stages, which move the world to their own time (world.py); work space, like
     # motion_pose, which the model lends the kernels so that no kernel signature carries the time
-    clock: np.ndarray            # (6,)
+    clock: np.ndarray            # (clock.SLOTS,)
     # Wind (wind.py): settings, velocity keys, gust modes, and the triangles it blows on
     wind_settings: np.ndarray    # (6,)
     wind_keys: np.ndarray        # (K, 4) time, velocity
@@ -200,7 +200,8 @@ def build_model(scene) -> Model:
         **build_spring_runs(springs, groups, rest_length),
         **pack_terrains(scene.terrains, float(terrain_offset.max(initial=0.0))),
         **pack_world(scene.terrains, built, offsets),
-        clock=np.zeros(6), **pack_wind(scene.wind), **wind_surface(scene, built, offsets),
+        clock=np.zeros(CLOCK_SLOTS), **pack_wind(scene.wind),
+        **wind_surface(scene, built, offsets),
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets),
         **surface_contact_arrays(scene.bodies, built, offsets, attached["attachment_nodes"]),

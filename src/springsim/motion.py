@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._jit import kernel
+from ._jit import inline_kernel, kernel
 from .errors import SceneError, is_finite, require
 
 LINEAR, SMOOTH, VELOCITY = 0, 1, 2
@@ -45,6 +45,10 @@ INFO = 12   # kind, first key, key count, pivot (3), velocity (3), angular veloc
 MAX_COMPONENT = 1e150
 KEY = 7     # time, position (3), rotation vector (3)
 POSE = 21   # R (9, row by row), c (3), pivot (3), c' (3), w (3)
+# where each part of a pose starts (the kernels read them through pose_rotation and the like)
+ROTATION, CENTRE, PIVOT, CENTRE_VELOCITY, ANGULAR_VELOCITY = 0, 9, 12, 15, 18
+ROTATION_PART, CENTRE_PART, PIVOT_PART = slice(0, 9), slice(9, 12), slice(12, 15)
+CENTRE_VELOCITY_PART, ANGULAR_VELOCITY_PART = slice(15, 18), slice(18, 21)
 
 
 @dataclass
@@ -129,7 +133,7 @@ class Motion:
         """``points`` (n, 3) as placed in the scene, moved to where they are at time t."""
         pose = self.pose(t, anchor)
         rotation = pose[:9].reshape(3, 3)
-        return (np.asarray(points, float) - pose[12:15]) @ rotation.T + pose[9:12]
+        return (np.asarray(points, float) - pose[PIVOT_PART]) @ rotation.T + pose[CENTRE_PART]
 
 
 def is_vector(value) -> bool:
@@ -257,3 +261,17 @@ def pose_into(info, keys, m, t, out):
         for j in range(3):
             w += (b * cross[i, j] + d * square[i, j]) * moved[9 + j]
         out[18 + i] = w
+
+
+@inline_kernel
+def pose_rotation(p):
+    """A pose's rotation R, row by row (nine numbers)."""
+    r = ROTATION
+    return (p[r], p[r + 1], p[r + 2], p[r + 3], p[r + 4], p[r + 5], p[r + 6], p[r + 7],
+            p[r + 8])
+
+
+@inline_kernel
+def pose_vector(p, part):
+    """The three numbers of a pose's ``part`` (CENTRE, PIVOT, CENTRE_VELOCITY, ...)."""
+    return p[part], p[part + 1], p[part + 2]

@@ -31,6 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .clock import WORLD_TIME
 from ._jit import inline_kernel, kernel
 from .errors import SceneError, is_finite, require
 
@@ -324,7 +325,7 @@ def wind_pass(model, x, v, scale, out, jacobian, diagonal_slot, h, blocks):
     (world.move_world)."""
     if model.wind_settings[ON] == 0.0:
         return
-    t = model.clock[2]
+    t = model.clock[WORLD_TIME]
     air, modes = air_at(model, t), model.wind_modes
     gusts = corner_gusts(air, modes, x, model.wind_triangles, t)
     # whether there are gusts is asked once, not at every triangle: asked there, it kept the

@@ -29,6 +29,8 @@ stages carry it along at that velocity). Backward Euler holds a pinned particle'
 the solve finds it, so ``aim_pins`` first gives it the velocity that reaches the path's point
 at the step's end: the springs feel the pin move within the step.
 
+The tables of the moving world are built once per model by world_tables.pack_world.
+
 A soft pin (``stiffness``, ``damping``) is a spring of its own from the particle to its path's
 point, with a damper against the velocity relative to the path: a force k (p - x) + d (u - v),
 in every stage's forces at the stage's time (``add_pin_forces``) and in backward Euler's solve
@@ -39,67 +41,18 @@ from typing import NamedTuple
 import numpy as np
 
 from ._jit import inline_kernel, kernel
-from .bodies.pins import followed_terrain
-from .motion import POSE, Motion, pack_motions, pose_into
-from .rivets import riveted_paths
+from .clock import CALL_START, STAGE_TIME, STEP_END, STEP_SIZE, STEP_START, WORLD_TIME
+from .motion import (ANGULAR_VELOCITY, CENTRE, CENTRE_VELOCITY, PIVOT, pose_into, pose_rotation,
+                     pose_vector)
 from .terrains.deforming_mesh import deform, deformed_velocity
 from .terrains import still_terrain_distance, terrain_distance
-
-
-def pack_world(terrains, built, offsets) -> dict:
-    """The model's arrays of the moving world: the motions of the moving terrains (in the
-    order of their terrain_motion rows) and of the pins that move (bodies/pins.py), their
-    poses at time 0, and each moving pin's particles. A pin that follows a terrain moving
-    rigidly takes that terrain's row; one that follows a deforming terrain a path of its own for
-    each particle (rivets.py); one that follows a still terrain holds, as a pin without motion
-    does."""
-    motions = [(terrain.motion, terrain.anchor()) for terrain in terrains
-               if terrain.motion is not None]
-    rows = {t: r for r, t in enumerate(t for t, terrain in enumerate(terrains)
-                                       if terrain.motion is not None)}
-    particles, rows_of_pins, placed, stiffness, damping = [], [], [], [], []
-    for body, start in zip(built, offsets):
-        for chosen, pin, paths in body.moving_pins:
-            where, followed = body.positions[chosen], followed_terrain(pin)
-            if paths is None and followed >= 0 and terrains[followed].deforms():
-                # each riveted to its nearest triangle
-                paths = riveted_paths(terrains[followed].deforming_surface(), where)
-            if paths is not None:   # an animation: a path of its own for each particle
-                row = np.arange(len(motions), len(motions) + len(chosen))
-                motions += [(path, anchor) for path, anchor in zip(paths, where)]
-            elif pin.motion is not None or rows.get(followed, -1) < 0:
-                # its own motion, or it holds (a soft pin, or one following a still terrain)
-                if pin.motion is None and pin.stiffness is None:
-                    continue   # a hard pin that holds: its particles have no mass to move
-                row = len(motions)
-                motions.append((pin.motion or Motion(), where.mean(axis=0)))
-            else:
-                terrain, row = terrains[followed], rows[followed]
-                # they keep the place they start at in the terrain's frame: where that place
-                # was when the terrain was placed, x = R0^T (x_start - c0) + pivot
-                pose = terrain.motion.pose(0.0, terrain.anchor())
-                where = (where - pose[9:12]) @ pose[:9].reshape(3, 3) + pose[12:15]
-            particles.append(chosen + start)
-            rows_of_pins.append(np.broadcast_to(np.asarray(row, np.int64), len(chosen)))
-            placed.append(where)
-            soft = pin.stiffness is not None
-            stiffness.append(np.full(len(chosen), float(pin.stiffness) if soft else 0.0))
-            damping.append(np.full(len(chosen), float(pin.damping) if soft else 0.0))
-    info, keys = pack_motions(motions)
-    poses = np.array([motion.pose(0.0, anchor) for motion, anchor in motions]).reshape(-1, POSE)
-    return {"motion_info": info, "motion_keys": keys, "motion_pose": poses,
-            "pin_particles": np.concatenate([np.zeros(0, np.int64)] + particles),
-            "pin_motion": np.concatenate([np.zeros(0, np.int64)] + rows_of_pins),
-            "pin_placed": np.concatenate([np.zeros((0, 3))] + placed),
-            "pin_stiffness": np.concatenate([np.zeros(0)] + stiffness),
-            "pin_damping": np.concatenate([np.zeros(0)] + damping)}
 
 
 @kernel
 def move_world(model, t):
     """Write every motion's pose at time t (s) into model.motion_pose; the wind reads t from
-    model.clock[2]."""
-    model.clock[2] = t
+    model.clock[WORLD_TIME]."""
+    model.clock[WORLD_TIME] = t
     for m in range(model.motion_info.shape[0]):
         pose_into(model.motion_info, model.motion_keys, m, t, model.motion_pose[m])
     for terrain in range(model.terrain_deforming.shape[0]):
@@ -110,7 +63,7 @@ def move_world(model, t):
 @kernel
 def step_time(model):
     """The time of the step being taken (s)."""
-    return model.clock[1]
+    return model.clock[STAGE_TIME]
 
 
 @kernel
@@ -119,9 +72,9 @@ def step_end(model, h):
     whole step it is the next step's start time itself, as start_step has it: the start plus h
     rounds differently, and a deforming terrain moved to the step's end would be refitted
     again, at a cost of its own, for the next start."""
-    if model.clock[1] == model.clock[3] and h == model.clock[5]:
-        return model.clock[4]
-    return model.clock[1] + h
+    if model.clock[STAGE_TIME] == model.clock[STEP_START] and h == model.clock[STEP_SIZE]:
+        return model.clock[STEP_END]
+    return model.clock[STAGE_TIME] + h
 
 
 @kernel
@@ -129,9 +82,10 @@ def start_step(model, x, v, done, h):
     """Set the clock to step ``done`` of this call (step size h), move the world there and put
     the moving pins on their paths. The time is the call's start plus done h: a function of
     the state's time alone."""
-    t = model.clock[0] + done * h
-    model.clock[1] = model.clock[3] = t
-    model.clock[4], model.clock[5] = model.clock[0] + (done + 1) * h, h   # step_end
+    t = model.clock[CALL_START] + done * h
+    model.clock[STAGE_TIME] = model.clock[STEP_START] = t
+    model.clock[STEP_END] = model.clock[CALL_START] + (done + 1) * h   # step_end's
+    model.clock[STEP_SIZE] = h
     move_world(model, t)
     place_pins(model, x, v)
 
@@ -143,17 +97,8 @@ def place_pins(model, x, v):
     for q in range(model.pin_particles.shape[0]):
         if model.pin_stiffness[q] > 0.0:
             continue   # a soft pin: a spring to its path (pin_accelerations)
-        i, p = model.pin_particles[q], model.motion_pose[model.pin_motion[q]]
-        d0 = model.pin_placed[q, 0] - p[12]
-        d1 = model.pin_placed[q, 1] - p[13]
-        d2 = model.pin_placed[q, 2] - p[14]
-        r0 = p[0] * d0 + p[1] * d1 + p[2] * d2   # R (x_start - pivot)
-        r1 = p[3] * d0 + p[4] * d1 + p[5] * d2
-        r2 = p[6] * d0 + p[7] * d1 + p[8] * d2
-        x[i, 0], x[i, 1], x[i, 2] = p[9] + r0, p[10] + r1, p[11] + r2
-        v[i, 0] = p[15] + p[19] * r2 - p[20] * r1
-        v[i, 1] = p[16] + p[20] * r0 - p[18] * r2
-        v[i, 2] = p[17] + p[18] * r1 - p[19] * r0
+        i = model.pin_particles[q]
+        x[i, 0], x[i, 1], x[i, 2], v[i, 0], v[i, 1], v[i, 2] = pin_target(model, q)
 
 
 @kernel
@@ -165,12 +110,12 @@ def aim_pins(model, x, v, h):
         if model.pin_stiffness[q] > 0.0:
             continue
         i, p = model.pin_particles[q], model.motion_pose[model.pin_motion[q]]
-        d0 = model.pin_placed[q, 0] - p[12]
-        d1 = model.pin_placed[q, 1] - p[13]
-        d2 = model.pin_placed[q, 2] - p[14]
-        v[i, 0] = (p[9] + p[0] * d0 + p[1] * d1 + p[2] * d2 - x[i, 0]) / h
-        v[i, 1] = (p[10] + p[3] * d0 + p[4] * d1 + p[5] * d2 - x[i, 1]) / h
-        v[i, 2] = (p[11] + p[6] * d0 + p[7] * d1 + p[8] * d2 - x[i, 2]) / h
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = pose_rotation(p)
+        c0, c1, c2 = pose_vector(p, CENTRE)
+        d0, d1, d2 = from_pivot(model, q, p)
+        v[i, 0] = (c0 + r00 * d0 + r01 * d1 + r02 * d2 - x[i, 0]) / h
+        v[i, 1] = (c1 + r10 * d0 + r11 * d1 + r12 * d2 - x[i, 1]) / h
+        v[i, 2] = (c2 + r20 * d0 + r21 * d1 + r22 * d2 - x[i, 2]) / h
 
 
 class TerrainView(NamedTuple):
@@ -205,15 +150,18 @@ def terrain_at(terrains, t, x0, x1, x2, radius):
         return still_terrain_distance(terrains.kind[t], terrains.parameters[t], terrains.data,
                                       x0, x1, x2, radius)
     p = terrains.pose[terrains.motion[t]]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = pose_rotation(p)
+    c0, c1, c2 = pose_vector(p, CENTRE)
+    q0, q1, q2 = pose_vector(p, PIVOT)
     # y - c, then R^T (y - c) + pivot: the point where the terrain was placed in the scene
-    d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
-    l0 = p[0] * d0 + p[3] * d1 + p[6] * d2 + p[12]
-    l1 = p[1] * d0 + p[4] * d1 + p[7] * d2 + p[13]
-    l2 = p[2] * d0 + p[5] * d1 + p[8] * d2 + p[14]
+    d0, d1, d2 = x0 - c0, x1 - c1, x2 - c2
+    l0 = r00 * d0 + r10 * d1 + r20 * d2 + q0
+    l1 = r01 * d0 + r11 * d1 + r21 * d2 + q1
+    l2 = r02 * d0 + r12 * d1 + r22 * d2 + q2
     phi, m0, m1, m2 = still_terrain_distance(terrains.kind[t], terrains.parameters[t],
                                              terrains.data, l0, l1, l2, radius)
-    return (phi, p[0] * m0 + p[1] * m1 + p[2] * m2, p[3] * m0 + p[4] * m1 + p[5] * m2,
-            p[6] * m0 + p[7] * m1 + p[8] * m2)
+    return (phi, r00 * m0 + r01 * m1 + r02 * m2, r10 * m0 + r11 * m1 + r12 * m2,
+            r20 * m0 + r21 * m1 + r22 * m2)
 
 
 @inline_kernel
@@ -225,9 +173,11 @@ def surface_velocity(terrains, t, x0, x1, x2):
     if terrains.motion[t] < 0:
         return 0.0, 0.0, 0.0
     p = terrains.pose[terrains.motion[t]]
-    d0, d1, d2 = x0 - p[9], x1 - p[10], x2 - p[11]
-    w0, w1, w2 = p[18], p[19], p[20]
-    return (p[15] + w1 * d2 - w2 * d1, p[16] + w2 * d0 - w0 * d2, p[17] + w0 * d1 - w1 * d0)
+    c0, c1, c2 = pose_vector(p, CENTRE)
+    u0, u1, u2 = pose_vector(p, CENTRE_VELOCITY)
+    w0, w1, w2 = pose_vector(p, ANGULAR_VELOCITY)
+    d0, d1, d2 = x0 - c0, x1 - c1, x2 - c2
+    return (u0 + w1 * d2 - w2 * d1, u1 + w2 * d0 - w0 * d2, u2 + w0 * d1 - w1 * d0)
 
 
 @kernel
@@ -261,14 +211,24 @@ def terrain_clearance(model, x: np.ndarray, t: float) -> np.ndarray:
 def pin_target(model, q):
     """Where moving pin q's path is now (the pose last moved to), and its velocity there."""
     p = model.motion_pose[model.pin_motion[q]]
-    d0 = model.pin_placed[q, 0] - p[12]
-    d1 = model.pin_placed[q, 1] - p[13]
-    d2 = model.pin_placed[q, 2] - p[14]
-    r0 = p[0] * d0 + p[1] * d1 + p[2] * d2
-    r1 = p[3] * d0 + p[4] * d1 + p[5] * d2
-    r2 = p[6] * d0 + p[7] * d1 + p[8] * d2
-    return (p[9] + r0, p[10] + r1, p[11] + r2, p[15] + p[19] * r2 - p[20] * r1,
-            p[16] + p[20] * r0 - p[18] * r2, p[17] + p[18] * r1 - p[19] * r0)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = pose_rotation(p)
+    c0, c1, c2 = pose_vector(p, CENTRE)
+    u0, u1, u2 = pose_vector(p, CENTRE_VELOCITY)
+    w0, w1, w2 = pose_vector(p, ANGULAR_VELOCITY)
+    d0, d1, d2 = from_pivot(model, q, p)
+    r0 = r00 * d0 + r01 * d1 + r02 * d2   # R (x_start - pivot)
+    r1 = r10 * d0 + r11 * d1 + r12 * d2
+    r2 = r20 * d0 + r21 * d1 + r22 * d2
+    return (c0 + r0, c1 + r1, c2 + r2, u0 + w1 * r2 - w2 * r1, u1 + w2 * r0 - w0 * r2,
+            u2 + w0 * r1 - w1 * r0)
+
+
+@inline_kernel
+def from_pivot(model, q, p):
+    """Where moving pin q was placed, from its pose's pivot."""
+    q0, q1, q2 = pose_vector(p, PIVOT)
+    return (model.pin_placed[q, 0] - q0, model.pin_placed[q, 1] - q1,
+            model.pin_placed[q, 2] - q2)
 
 
 @kernel

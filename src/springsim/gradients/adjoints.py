@@ -33,8 +33,8 @@ from .implicit_contact import adjoint as contact_adjoint, replay
 from .implicit_lookup import touches_terrains
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
-from .pins import aim, place, release, soft
-from .wind import blows
+from .pins import aim, place, release
+from .terms import any_acts
 
 ADJOINTS: dict[str, type] = {}
 # how far (relative to the fastest speed) an explicit step's NumPy replay may end from the
@@ -153,7 +153,8 @@ class Runs(NamedTuple):
     def of(cls, physical):
         layout = run_layout(physical.a, physical.b)
         loose = layout.loose
-        plain = not (blows(physical) or soft(physical).any() or len(physical.attachment_nodes))
+        # hard bindings are no term but are held between the stages: not plain either
+        plain = not (any_acts(physical) or len(physical.attachment_nodes))
         return cls(physical, layout, entry_table(layout, physical.ks, physical.kd, physical.rest),
                    (physical.a[loose], physical.b[loose], physical.ks[loose], physical.kd[loose],
                     physical.rest[loose]),

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..attachments import HOLD_SWEEPS, HOLD_TOLERANCE
+from .terms import AdjointTerm
 
 
 def soft(physical) -> np.ndarray:
@@ -230,3 +231,53 @@ def mass_share_vjp(physical, rows, u_bar, bar):
     mass_bar = np.zeros_like(bar.mass)
     np.add.at(mass_bar, nodes, -w_bar * w * w)
     bar.mass += np.where(physical.free, mass_bar, 0.0)
+
+
+class SoftAttachmentsAdjoint(AdjointTerm):
+    """The soft bindings' derivative (terms/soft_attachments.py): they couple the four
+    particles of each binding, so the matrix parts are their own."""
+
+    @classmethod
+    def acts(cls, physical) -> bool:
+        return bool(soft(physical).any())
+
+    @classmethod
+    def forces(cls, physical, x, v):
+        return attachment_forces(physical, x, v)
+
+    @classmethod
+    def forces_vjp(cls, physical, x, v, g, x_bar, v_bar, bar) -> None:
+        attachment_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
+
+    @classmethod
+    def first_iteration_rhs(cls, physical, v, h):
+        return first_iteration_rhs(physical, v, h)
+
+    @classmethod
+    def first_iteration_rhs_vjp(cls, physical, v, h, g, v_bar, bar) -> None:
+        first_iteration_rhs_vjp(physical, v, h, g, v_bar, bar)
+
+    @classmethod
+    def diagonal_blocks(cls, physical, x, v, h):
+        return attachment_diagonal(physical, len(x), h)
+
+    @classmethod
+    def diagonal_blocks_vjp(cls, physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
+        attachment_diagonal_vjp(physical, h, weights, bar)
+
+    @classmethod
+    def matrix_entries(cls, physical, x, v, h):
+        return matrix_entries(physical, h)
+
+    @classmethod
+    def product_vjp(cls, physical, x, v, h, u, g, x_bar, v_bar, bar) -> None:
+        attachment_product_vjp(physical, u, g, h, bar)
+
+    @classmethod
+    def add_forward_blocks(cls, solver, physical, x, v, h) -> None:
+        """The forward's own kernel: the coupled blocks' slots are the solve layout's."""
+        from ..attachments import add_attachment_jacobian
+
+        if cls.acts(physical):
+            add_attachment_jacobian(solver.arrays, solver.layout.attachment_slots, h, False, v,
+                                    solver.blocks, solver.unused_rhs)

@@ -59,16 +59,15 @@ from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
 from .contact import add_curvature, along, impacts, impacts_vjp
 from .physics import geometry, stiffness_coefficients, system_product_vjp
 from .solve import newton_rhs, rhs_vjp, solve_reduced, system_matrix
-from .attachments import (attachment_diagonal, attachment_diagonal_vjp, attachment_product_vjp,
-                          hold, hold_vjp, holds)
+from .attachments import hold, hold_vjp, holds
 from .body_contact import respond, respond_vjp
 from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, penalty_end,
                               penalty_matrix, penalty_vjp)
-from .pins import pin_blocks, pin_blocks_vjp, place, release
+from .pins import place, release
 from .clock import STEP_START
 from .implicit_lookup import look_up, refuse_turning, swept, swept_vjp, unseen
 from .terrain_shapes import Flat
-from .wind import outer_weights, wind_blocks, wind_blocks_vjp
+from . import terms
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)
 FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO, FLOOR_INSIDE = 0, 1, 2, 3   # inside: -max(phi, 0) / h = 0
@@ -256,7 +255,7 @@ class Replay(NamedTuple):
 
 def diagonal_blocks(physical, x_k, v_k, h):
     """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag,
-    the wind's, soft pins' and soft attachments' blocks and every spring's C = p l l^T + q I
+    the terms' diagonal blocks and every spring's C = p l l^T + q I
     (physics.system_product)."""
     springs = geometry(physical, x_k)
     along_, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -269,8 +268,7 @@ def diagonal_blocks(physical, x_k, v_k, h):
     np.add.at(out, physical.a, blocks)
     np.add.at(out, physical.b, blocks)
     out += (physical.solve_mass + h * physical.drag)[:, None, None] * np.eye(3)
-    return (out + wind_blocks(physical, x_k, v_k, h) + pin_blocks(physical, len(x_k), h)
-            + attachment_diagonal(physical, len(x_k), h))
+    return out + terms.diagonal_blocks(physical, x_k, v_k, h)
 
 
 def held(constraints, kind, u0):
@@ -683,9 +681,7 @@ def iteration_adjoint(physical, h, x, v, constraints, it, dv_bar, c_bar, held_ba
         if contacts is not None:
             penalty_vjp(contacts, cap_bar, np.zeros_like(x), h, bodies[2])
     diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar)
-    wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
-    pin_blocks_vjp(physical, h, weights, bar)
-    attachment_diagonal_vjp(physical, h, weights, bar)
+    terms.diagonal_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
     dv_start_bar = dv_bar + u0_bar - physical.solve_mass[:, None] * b_bar
     rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, b_bar, out_x, out_v, xk_bar, vk_bar, bar)
     out_v += u0_bar
@@ -818,13 +814,9 @@ def cap_adjoint(physical, h, estimate, constraints, cap, c_bar, b_bar, u0_bar, h
 
 
 def matrix_vjp(physical, h, estimate, u, g, estimate_bar, bar):
-    """Add g . d(A u)/d(x_k, v_k, parameters), u held fixed: the springs', the wind's and the
-    soft pins' and the soft attachments'."""
+    """Add g . d(A u)/d(x_k, v_k, parameters), u held fixed: the springs' and the terms'."""
     system_product_vjp(physical, estimate[0], u, g, h, estimate_bar[0], bar)
-    weights = outer_weights(g, u)
-    wind_blocks_vjp(physical, *estimate, h, weights, *estimate_bar, bar)
-    pin_blocks_vjp(physical, h, weights, bar)
-    attachment_product_vjp(physical, u, g, h, bar)
+    terms.product_vjp(physical, *estimate, h, u, g, *estimate_bar, bar)
 
 
 def diagonal_blocks_vjp(physical, x_k, h, weights, xk_bar, bar):

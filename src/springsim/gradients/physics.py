@@ -21,11 +21,9 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels
-from .attachments import attachment_forces, attachment_forces_vjp
 from .body_contact import NO_BODIES, Bodies
 from .contact import Planes, contact_accelerations, contact_accelerations_vjp
-from .pins import pin_forces, pin_forces_vjp
-from .wind import wind_forces, wind_forces_vjp
+from .terms import external_forces, external_forces_vjp
 
 
 # The contact keys that are parameters, each a Cotangents field, with the Bodies field it is
@@ -220,25 +218,21 @@ def accelerations(physical: Physical, x: np.ndarray, v: np.ndarray) -> np.ndarra
     force = spring_forces(physical, x, v)
     return (w[:, None] * (force - physical.drag[:, None] * v)
             + np.where(physical.free[:, None], physical.gravity, 0.0)
-            + w[:, None] * (wind_forces(physical, x, v) + pin_forces(physical, x, v)
-                            + attachment_forces(physical, x, v)))
+            + w[:, None] * external_forces(physical, x, v))
 
 
 def accelerations_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
     """Add g . d(accelerations)/d(everything) into x_bar, v_bar and bar."""
     w = physical.inv_mass
     force = spring_forces(physical, x, v)
-    net = (force - physical.drag[:, None] * v + wind_forces(physical, x, v)
-           + pin_forces(physical, x, v) + attachment_forces(physical, x, v))
+    net = force - physical.drag[:, None] * v + external_forces(physical, x, v)
     free = physical.free
     bar.gravity += g[free].sum(axis=0)
     bar.mass -= np.where(free, w * w * dot(g, net), 0.0)
     bar.drag -= w * dot(g, v)
     v_bar -= (w * physical.drag)[:, None] * g
     spring_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
-    wind_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
-    pin_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
-    attachment_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
+    external_forces_vjp(physical, x, v, w[:, None] * g, x_bar, v_bar, bar)
 
 
 def step_accelerations(physical: Physical, x, v, h):

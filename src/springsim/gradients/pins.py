@@ -16,8 +16,10 @@ follows a terrain; a pin that holds hard is a pinned particle, in none of this.
 """
 import numpy as np
 
-from ..motion import POSE, pose_into
+from ..motion import (ANGULAR_VELOCITY_PART, CENTRE_PART, CENTRE_VELOCITY_PART, PIVOT_PART, POSE,
+                      ROTATION_PART, pose_into)
 from .clock import FORCE_TIME
+from .terms import AdjointTerm
 
 
 def soft(physical):
@@ -35,9 +37,9 @@ def targets(physical, t):
             poses[m] = np.empty(POSE)
             pose_into(physical.motion_info, physical.motion_keys, m, t, poses[m])
         p = poses[m]
-        r = p[0:9].reshape(3, 3) @ (physical.pin_placed[q] - p[12:15])
-        points[q] = p[9:12] + r
-        velocities[q] = p[15:18] + np.cross(p[18:21], r)
+        r = p[ROTATION_PART].reshape(3, 3) @ (physical.pin_placed[q] - p[PIVOT_PART])
+        points[q] = p[CENTRE_PART] + r
+        velocities[q] = p[CENTRE_VELOCITY_PART] + np.cross(p[ANGULAR_VELOCITY_PART], r)
     return points, velocities
 
 
@@ -137,3 +139,35 @@ def pin_blocks_vjp(physical, h, weights, bar) -> None:
     trace = np.einsum("kii->k", weights[physical.pin_particles[on]])
     bar.pin_stiffness[on] += h * h * trace
     bar.pin_damping[on] += h * trace
+
+
+class SoftPinsAdjoint(AdjointTerm):
+    """The soft pins' derivative (terms/soft_pins.py): (h d + h^2 k) I on the diagonal."""
+
+    @classmethod
+    def acts(cls, physical) -> bool:
+        return bool(soft(physical).any())
+
+    @classmethod
+    def forces(cls, physical, x, v):
+        return pin_forces(physical, x, v)
+
+    @classmethod
+    def forces_vjp(cls, physical, x, v, g, x_bar, v_bar, bar) -> None:
+        pin_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
+
+    @classmethod
+    def first_iteration_rhs(cls, physical, v, h):
+        return first_iteration_rhs(physical, v, h)
+
+    @classmethod
+    def first_iteration_rhs_vjp(cls, physical, v, h, g, v_bar, bar) -> None:
+        first_iteration_rhs_vjp(physical, v, h, g, v_bar, bar)
+
+    @classmethod
+    def diagonal_blocks(cls, physical, x, v, h):
+        return pin_blocks(physical, len(x), h)
+
+    @classmethod
+    def diagonal_blocks_vjp(cls, physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
+        pin_blocks_vjp(physical, h, weights, bar)

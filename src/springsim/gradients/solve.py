@@ -13,9 +13,6 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import linalg
 
-from .attachments import (attachment_forces, attachment_forces_vjp, attachment_product_vjp,
-                          first_iteration_rhs as attachment_rhs,
-                          first_iteration_rhs_vjp as attachment_rhs_vjp, matrix_entries)
 from .physics import (
     geometry,
     spring_forces,
@@ -25,9 +22,7 @@ from .physics import (
     stiffness_product_vjp,
     system_product_vjp,
 )
-from .pins import (first_iteration_rhs, first_iteration_rhs_vjp, pin_blocks, pin_blocks_vjp,
-                   pin_forces, pin_forces_vjp)
-from .wind import blows, outer_weights, wind_blocks, wind_blocks_vjp, wind_forces, wind_forces_vjp
+from . import terms
 
 ADJOINT_TOLERANCE = 1e-12   # relative residual of the adjoint's CG solves
 # unknowns up to which a sparse LU solves (exact, and quick there); beyond, CG: a body's 3D
@@ -64,18 +59,12 @@ class ForwardSolver:
 
     def assemble(self, physical, x, v, h):
         """The system matrix A at the estimate (x, v) (kept for ``solve``); v enters through the
-        wind's blocks alone. The soft attachments' blocks are the forward's own."""
-        from ..attachments import add_attachment_jacobian
+        terms' blocks alone (the wind's)."""
         from ..implicit.jacobian import assemble_diagonal_and_terms
 
         assemble_diagonal_and_terms(self.arrays, self.layout, x, 1.0, h, h * h,
                                     self.blocks, self.terms)
-        add_attachment_jacobian(self.arrays, self.layout.attachment_slots, h, False, v,
-                                self.blocks, self.unused_rhs)
-        slots = self.layout.diagonal.diagonal_slot
-        self.blocks[slots] += pin_blocks(physical, len(x), h)
-        if blows(physical):
-            self.blocks[slots] += wind_blocks(physical, x, v, h)
+        terms.add_forward_blocks(self, physical, x, v, h)
 
     def solve(self, rhs, contacts=None):
         """u with A u = rhs on the free particles (zero on the pinned ones); A with the active
@@ -94,9 +83,9 @@ class ForwardSolver:
 
 
 def system_matrix(physical, x, v, h):
-    """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag, the
-    wind's and soft pins' blocks, every spring's block C = p l l^T + q I added to (a, a),
-    (b, b) and subtracted from (a, b), (b, a), and the soft attachments' blocks."""
+    """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag,
+    every spring's block C = p l l^T + q I added to (a, a), (b, b) and subtracted from (a, b),
+    (b, a), and the terms' entries."""
     count = x.shape[0]
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
@@ -115,12 +104,10 @@ def system_matrix(physical, x, v, h):
     rows.append(np.arange(3 * count))
     cols.append(np.arange(3 * count))
     values.append(diagonal)
-    particle = 3 * np.arange(count)[:, None, None]
-    rows.append((particle + np.arange(3)[None, :, None]).repeat(3, axis=2))
-    cols.append((particle + np.arange(3)[None, None, :]).repeat(3, axis=1))
-    values.append(wind_blocks(physical, x, v, h) + pin_blocks(physical, count, h))
-    for entries, entry in zip((rows, cols, values), matrix_entries(physical, h)):
-        entries.append(entry)
+    for term_rows, term_cols, term_values in terms.matrix_entries(physical, x, v, h):
+        rows.append(term_rows)
+        cols.append(term_cols)
+        values.append(term_values)
     matrix = sparse.coo_matrix((np.concatenate([v.ravel() for v in values]),
                                 (np.concatenate([r.ravel() for r in rows]),
                                  np.concatenate([c.ravel() for c in cols]))),
@@ -155,13 +142,10 @@ def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, v
     bar.mass += np.where(free, h * lam @ physical.gravity - np.einsum("ij,ij->i", lam, dv), 0.0)
     bar.drag -= h * np.einsum("ij,ij->i", lam, v_k)
     vk_bar -= h * physical.drag[:, None] * lam
-    wind_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
-    pin_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
-    attachment_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
+    terms.external_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     if first:
         stiffness_product_vjp(physical, x, v, h * h * lam, x_bar, v_bar, bar)
-        first_iteration_rhs_vjp(physical, v, h, lam, v_bar, bar)
-        attachment_rhs_vjp(physical, v, h, lam, v_bar, bar)
+        terms.first_iteration_rhs_vjp(physical, v, h, lam, v_bar, bar)
 
 
 def estimate(x, v, dv, h, first):
@@ -174,15 +158,14 @@ def estimate(x, v, dv, h, first):
 
 def newton_rhs(physical, h, x, v, dv, first):
     """r_k = h (F(x_k, v_k) + m g - c v_k) - M dv_k (+ h^2 dF/dx(x) v in the first); F with
-    the wind's, the soft pins' and the soft attachments' forces."""
+    the terms' forces."""
     x_k, v_k = estimate(x, v, dv, h, first)
     external = (np.where(physical.free[:, None], physical.mass[:, None] * physical.gravity, 0.0)
-                - physical.drag[:, None] * v_k + wind_forces(physical, x_k, v_k)
-                + pin_forces(physical, x_k, v_k) + attachment_forces(physical, x_k, v_k))
+                - physical.drag[:, None] * v_k + terms.external_forces(physical, x_k, v_k))
     rhs = h * (spring_forces(physical, x_k, v_k) + external) - physical.solve_mass[:, None] * dv
     if first:
-        rhs += (h * h * stiffness_product(physical, x, v) + first_iteration_rhs(physical, v, h)
-                + attachment_rhs(physical, v, h))
+        rhs += (h * h * stiffness_product(physical, x, v)
+                + terms.first_iteration_rhs(physical, v, h))
     return rhs
 
 
@@ -222,10 +205,7 @@ def iteration_vjp(physical, h, x, v, dv, ddv, first, lam, dv_bar, x_bar, v_bar, 
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)
-    weights = outer_weights(-lam, ddv)
-    wind_blocks_vjp(physical, x_k, v_k, h, weights, xk_bar, vk_bar, bar)
-    pin_blocks_vjp(physical, h, weights, bar)
-    attachment_product_vjp(physical, ddv, -lam, h, bar)
+    terms.product_vjp(physical, x_k, v_k, h, ddv, -lam, xk_bar, vk_bar, bar)
     x_bar += xk_bar
     v_bar += vk_bar
     if not first:   # x_k = x + h (v + dv), v_k = v + dv

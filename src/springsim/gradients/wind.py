@@ -21,6 +21,7 @@ import numpy as np
 
 from ..wind import DENSITY, DRAG, FRICTION, ON, STRENGTH
 from .clock import FORCE_TIME
+from .terms import AdjointTerm
 
 STEP = 1e-30        # the complex step: far below rounding, so f(z + i STEP) has no error in f
 TWO_NINTHS = 2.0 / 9.0
@@ -380,7 +381,26 @@ def wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
         ball_blocks_vjp(physical, x, v, at, h, weights, x_bar, v_bar, bar)
 
 
-def outer_weights(left, right):
-    """The cotangent of each diagonal block for sum_i left_i . B_i right_i: left_i right_i^T."""
-    return left[:, :, None] * right[:, None, :]
+class WindAdjoint(AdjointTerm):
+    """The wind's derivative (terms/air.py): its blocks sit on the diagonal, and depend on v."""
+
+    @classmethod
+    def acts(cls, physical) -> bool:
+        return blows(physical)
+
+    @classmethod
+    def forces(cls, physical, x, v):
+        return wind_forces(physical, x, v)
+
+    @classmethod
+    def forces_vjp(cls, physical, x, v, g, x_bar, v_bar, bar) -> None:
+        wind_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
+
+    @classmethod
+    def diagonal_blocks(cls, physical, x, v, h):
+        return wind_blocks(physical, x, v, h)
+
+    @classmethod
+    def diagonal_blocks_vjp(cls, physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
+        wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar)
 

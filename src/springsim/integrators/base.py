@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from ..clock import CALL_START
 from ..errors import SceneError
 from ..spring_runs import partition_count
 
@@ -91,7 +92,7 @@ class KernelIntegrator(Integrator):
     def advance_keeping(self, model, state, dt, kept, starts):
         """``advance`` (where ``keeps_stages``) of len(kept) steps, keeping each one's start
         and stages' accelerations."""
-        model.arrays.clock[0] = state.time
+        model.arrays.clock[CALL_START] = state.time
         call = self.keeping_call(model, state, dt, kept, starts)
         done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
@@ -125,7 +126,8 @@ class KernelIntegrator(Integrator):
         call = self.kernel_call(model, state, dt, steps)
         if call.kernel is self.parallel_kernel:
             numba.set_num_threads(threads)
-        model.arrays.clock[0] = state.time   # the kernels' steps take their times from it
+        # the kernels' steps take their times from it
+        model.arrays.clock[CALL_START] = state.time
         done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
 

@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import kernel
-from ..attachments import add_attachment_forces, add_attachment_jacobian
+from ..clock import CALL_START, STAGE_TIME
 from ..collision.ccd.crossing_check import MOST_HALVINGS, carried_through
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, any_self_collision, grown_own_pairs,
@@ -55,9 +55,8 @@ from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_ter
 from ..implicit.pattern import build_solve_layout
 from ..implicit.spring_terms import spring_terms_like
 from ..state import ContactMemory
-from ..wind import add_wind_with_jacobian
-from ..world import (add_pin_forces, add_pin_jacobian, aim_pins, move_world, step_end,
-                     step_time)
+from ..terms import add_external_jacobians, add_step_end_forces
+from ..world import aim_pins, move_world, step_end, step_time
 from .base import Integrator, KernelCall, register
 from ._steps import add_scaled, copy_positions, drive
 
@@ -201,11 +200,7 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     assemble_diagonal_and_terms(model, layout, work.x_k, 1.0, h, h * h, work.blocks, work.terms)
     newton_rhs(model, x, work.x_k, v, work.v_k, work.dv, h, first, work.force, work.columns,
                work.rhs)
-    add_pin_jacobian(model, pattern.diagonal_slot, h, first, v, work.blocks, work.rhs)
-    add_attachment_jacobian(model, layout.attachment_slots, h, first, v, work.blocks, work.rhs)
-    # the air at the step's end, its force and derivative in one pass (wind.wind_pass)
-    add_wind_with_jacobian(model, pattern.diagonal_slot, work.x_k, work.v_k, h, work.rhs,
-                           work.blocks)
+    add_external_jacobians(model, layout, h, first, work.x_k, work.v_k, v, work.blocks, work.rhs)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
     work.ddv[:] = 0.0
     for i in range(x.shape[0]):
@@ -223,7 +218,7 @@ def assemble_system(model, layout, state, work, contacts, h, first):
 @kernel
 def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
     """rhs = h F(x_k, v_k) - M dv_k, plus h^2 dF/dx v in the first iteration (dv_k = 0, x_k = x);
-    the wind's part of F is added with its derivative (assemble_system)."""
+    a term that adds its force with its derivative (the wind) does so in assemble_system."""
     spring_forces(model, x_k, v_k, columns, force)
     for i in range(x.shape[0]):
         w = model.inv_mass[i]
@@ -231,8 +226,7 @@ def newton_rhs(model, x, x_k, v, v_k, dv, h, first, force, columns, rhs):
         for c in range(3):
             external = (m * model.gravity[c] if w > 0.0 else 0.0) - model.drag[i] * v_k[i, c]
             rhs[i, c] = h * (force[i, c] + external) - m * dv[i, c]
-    add_pin_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft pins, at the step's end
-    add_attachment_forces(model, x_k, v_k, np.full(1, h), rhs)   # soft attachments, too
+    add_step_end_forces(model, x_k, v_k, np.full(1, h), rhs)   # the terms' (terms/)
     if first:
         add_stiffness_product(model, x, v, h * h, rhs)
 
@@ -332,12 +326,12 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     pairs_at_start = pairs
     while done < whole:
         # h * whole / whole is h exactly (powers of two): a step that is not cut is as before
-        model.clock[1] = step_start + h * done / whole
+        model.clock[STAGE_TIME] = step_start + h * done / whole
         stepped = backward_euler_step(model, state, scratch, h * size / whole, pairs)
         if carried_through(model, saved.x, state.x, stepped, scratch.solve_pairs):
             if size == 1:   # even the shortest part crossed: the step as it was
                 copy_state(state, start)
-                model.clock[1] = step_start
+                model.clock[STAGE_TIME] = step_start
                 return backward_euler_step(model, state, scratch, h, pairs_at_start)
             copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
@@ -350,7 +344,8 @@ def implicit_euler_step(model, state, scratch, h, pairs):
         if done < whole:
             copy_state(scratch.part, state)
             saved = scratch.part
-    model.clock[1] = step_start   # the pass after the step takes its end from the step's start
+    # the pass after the step takes its end from the step's start
+    model.clock[STAGE_TIME] = step_start
     return pairs
 
 
@@ -454,7 +449,8 @@ class ImplicitEuler(Integrator):
     def advance(self, model, state, dt, steps, threads=1):
         # serial: threads are for the explicit methods' large models (integrators.KernelIntegrator)
         state.solve_pairs = _solve_pairs(state)
-        model.arrays.clock[0] = state.time   # the steps take their times from it (world.py)
+        # the steps take their times from it (world.py)
+        model.arrays.clock[CALL_START] = state.time
         call = self.kernel_call(model, state, dt, steps)
         done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)

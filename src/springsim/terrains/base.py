@@ -143,7 +143,7 @@ def pack_terrains(terrains, largest_offset: float = 0.0) -> dict:
         data.append(np.asarray(own, float).ravel())
         length += data[-1].size
     packed["terrain_data"] = np.concatenate(data)
-    # each moving terrain's row of the motion table (world.pack_world packs the motions in
+    # each moving terrain's row of the motion table (world_tables.pack_world packs the motions in
     # this order, then the pins')
     packed["terrain_motion"] = np.full(count, -1, np.int64)
     packed["terrain_motion"][[t for t, terrain in enumerate(terrains)

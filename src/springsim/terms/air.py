@@ -1,0 +1,20 @@
+"""The wind as a term: drag and lift of the moving air on the cloth's triangles and the balls
+(wind.py writes the kernels; gradients/wind.py differentiates them). Under backward Euler its
+force at the estimate comes with its Jacobian, in one pass over the triangles."""
+from .._jit import inline_kernel
+from ..wind import add_wind_forces, add_wind_with_jacobian
+from .base import Term, register
+
+
+@inline_kernel
+def wind_jacobian(model, layout, h, first, x_k, v_k, v, blocks, rhs):
+    add_wind_with_jacobian(model, layout.diagonal.diagonal_slot, x_k, v_k, h, rhs, blocks)
+
+
+@register
+class Air(Term):
+    name = "wind"
+    add_forces = add_wind_forces
+    add_jacobian = wind_jacobian
+    adjoint = "springsim.gradients.wind:WindAdjoint"
+    order = 30
