@@ -1,6 +1,7 @@
 """Every registered term (terms/) against its adjoint (gradients/terms.py), on one model where
 each acts: the soft pins of test_gradients_pins, the soft stitch of test_gradients_attachments
-and the gusty wind on a cloth and two balls of test_gradients_wind, together. For each term, the
+and the gusty wind on a cloth and two balls of test_gradients_wind, and an attractor
+(terms/attractor.py), together. For each term, the
 forward kernels and the adjoint's NumPy give the same force, the same share of backward Euler's
 matrix and right-hand side; and the adjoint's vector-Jacobian products agree with central
 finite differences of its own force and blocks. A new term is held to all of it by being
@@ -23,6 +24,7 @@ def every_term_scene():
     from springsim.bodies.pins import Pin, Region
     from springsim.motion import Motion
     from springsim.scene import Scene
+    from springsim.terms.attractor import Attractor
     from springsim.wind import Gusts, Wind
 
     first = Cloth(particles_per_edge=4, width=1.0, height=1.0, pinned="none",
@@ -38,7 +40,9 @@ def every_term_scene():
                          Ball(position=(0.5, 1.2, 0.3), radius=0.05, mass=0.1)])
     wind = Wind(velocity=(8.0, 1.0, -3.0), density=1.2, drag=1.2, friction=0.05,
                 gusts=Gusts(strength=0.4, length=0.7, seed=3))
-    return Scene(bodies=[first, second, balls], attachments=[stitch], terrains=[], wind=wind)
+    pull = Attractor(point=(0.2, 0.5, 0.4), stiffness=30.0, damping=0.3, bodies=[1, 2])
+    return Scene(bodies=[first, second, balls], attachments=[stitch], terrains=[], wind=wind,
+                 forces=[pull])
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +62,10 @@ def setting():
     return model, physical, x, v
 
 
+def table(model, term):
+    return model.arrays.term_tables[term.slot]
+
+
 def pairs():
     return list(zip(TERMS, adjoint_terms()))
 
@@ -66,18 +74,19 @@ def test_every_term_has_an_adjoint_and_acts_in_the_model(setting):
     from springsim.gradients.terms import AdjointTerm
 
     _, physical, _, _ = setting
-    assert [term.name for term in TERMS] == ["soft_pins", "soft_attachments", "wind"]
+    assert [term.name for term in TERMS] == ["soft_pins", "soft_attachments", "wind",
+                                             "attractor"]
     for term, adjoint in pairs():
         assert issubclass(adjoint, AdjointTerm), term.name
         assert adjoint.acts(physical), term.name
 
 
-@pytest.mark.parametrize("number", range(3))
+@pytest.mark.parametrize("number", range(4))
 def test_forward_and_adjoint_forces_agree(setting, number):
     model, physical, x, v = setting
     term, adjoint = pairs()[number]
     forward = np.zeros_like(x)
-    term.add_forces(model.arrays, x, v, np.ones(1), forward)
+    term.add_forces(model.arrays, table(model, term), x, v, np.ones(1), forward)
     assert np.abs(forward).max() > 0.0
     np.testing.assert_allclose(adjoint.forces(physical, x, v), forward, rtol=1e-12, atol=1e-13)
 
@@ -93,16 +102,16 @@ def forward_matrix(model, layout, term, x, v, first):
     pattern = layout.diagonal
     blocks = np.zeros((len(pattern.column), 3, 3))
     rhs = np.zeros_like(x)
-    term.add_jacobian(model.arrays, layout, H, first, x, v, v, blocks, rhs)
+    term.add_jacobian(model.arrays, table(model, term), layout, H, first, x, v, v, blocks, rhs)
     if term.add_step_end_forces is not None:
-        term.add_step_end_forces(model.arrays, x, v, np.full(1, H), rhs)
+        term.add_step_end_forces(model.arrays, table(model, term), x, v, np.full(1, H), rhs)
     row_of_slot = np.repeat(np.arange(len(x)), np.diff(pattern.row_start))
     rows = (3 * row_of_slot[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
     columns = (3 * pattern.column[:, None, None] + np.arange(3)[None, None, :]).repeat(3, 1)
     return dense(rows.ravel(), columns.ravel(), blocks.ravel(), 3 * len(x)), rhs
 
 
-@pytest.mark.parametrize("number", range(3))
+@pytest.mark.parametrize("number", range(4))
 def test_forward_and_adjoint_system_shares_agree(setting, number):
     """Matrix: the forward's blocks against the adjoint's entries; right-hand side: the
     forward's h F + (first iteration) its h^2 dF/dx v against the adjoint's."""
@@ -129,7 +138,7 @@ def central(function, value, direction, step=1e-6):
     return (function(value + step * direction) - function(value - step * direction)) / (2 * step)
 
 
-@pytest.mark.parametrize("number", range(3))
+@pytest.mark.parametrize("number", range(4))
 def test_adjoint_products_match_finite_differences(setting, number):
     """forces_vjp and product_vjp against central differences in x and v, and
     first_iteration_rhs_vjp in v."""

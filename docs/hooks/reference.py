@@ -73,6 +73,14 @@ NOTES = {
     "scene/*/bodies": ("", "the `[[bodies]]` tables, each with a `type` (below)"),
     "scene/*/terrains": ("", "the `[[terrains]]` tables, each with a `type` (below); none is free "
                              "fall"),
+    "scene/*/forces": ("", "the `[[forces]]` tables, each with a `type` (below; "
+                           "[Scene files](../scene-files.md#forces-forces))"),
+    "forces/attractor/type": ("", "`attractor`: a spring and damper pulling each particle of "
+                                  "the chosen bodies toward a point"),
+    "forces/attractor/point": ("m", "where it pulls to"),
+    "forces/attractor/stiffness": ("N/m", "the spring on each particle"),
+    "forces/attractor/damping": ("N s/m", "the damper on each particle, against its velocity"),
+    "forces/attractor/bodies": ("", "the body numbers it pulls; empty: every body"),
     "scene/*/integrator": ("", "the time integrator ([Physics](physics.md#integrators))"),
     "scene/*/dt": ("s", "time step"),
     "scene/*/duration": ("s", "how long `springsim run` simulates"),
@@ -264,7 +272,7 @@ NOTES |= {f"bodies/*/pins.N.{key}": note for key, note in MOTION_NOTES.items()}
 def group_type_key(scene_key):
     """("bodies", "cube", "structural.ks") for ``bodies.N.structural.ks`` of a cube."""
     parts = scene_key.path.split(".")
-    if parts[0] in ("bodies", "terrains") and len(parts) > 2:
+    if parts[0] in ("bodies", "terrains", "forces") and len(parts) > 2:
         return parts[0], scene_key.owner, ".".join(parts[2:])
     return "scene", "*", scene_key.path
 
@@ -288,6 +296,7 @@ def base_scene(group: str, kind: str):
     from springsim.scene import Scene
     from springsim.scenefile import BODY_TYPES, TERRAIN_TYPES
     from springsim.bodies.cube import Cube
+    from springsim.terms import FORCE_TYPES
 
     if group == "bodies":
         body = BODY_TYPES[kind]()
@@ -299,6 +308,8 @@ def base_scene(group: str, kind: str):
         if kind == "mesh":
             terrain.file = str(MESHES / "stairs.obj")
         return Scene(bodies=[Cube()], terrains=[terrain])
+    if group == "forces":
+        return Scene(bodies=[Cube()], forces=[FORCE_TYPES[kind]()])
     return Scene(bodies=[Cube()])
 
 
@@ -370,7 +381,7 @@ def _section_of(scene_key) -> tuple[str, str]:
     group, kind, _ = group_type_key(scene_key)
     if group == "scene":
         return "scene", "Top level"
-    table = "[[bodies]]" if group == "bodies" else "[[terrains]]"
+    table = f"[[{group}]]"
     return f"{group}/{kind}", f'{table} with `type = "{kind}"`'
 
 

@@ -13,6 +13,7 @@ from .bodies.balls import collision_parameters
 from .clock import SLOTS as CLOCK_SLOTS
 from .collision.shapes.surfaces import surface_contact_arrays
 from .spring_runs import build_spring_runs
+from .terms import TERMS
 from .springs import SpringKind
 from .surfaces import Embedding
 from .terrains import pack_terrains
@@ -107,6 +108,9 @@ class ModelArrays(NamedTuple):
     attachment_weights: np.ndarray = np.empty((0, 4))          # (A, 4), summing to zero
     attachment_stiffness: np.ndarray = np.empty(0)             # (A,) N/m
     attachment_damping: np.ndarray = np.empty(0)               # (A,) N s/m
+    # each term's own table of parameters, in terms.TERMS' order (terms/base.py): () for the
+    # forces whose arrays are above
+    term_tables: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -205,7 +209,7 @@ def build_model(scene) -> Model:
         **collision_arrays(scene.bodies, built, radius),
         **sheet_arrays(built, offsets),
         **surface_contact_arrays(scene.bodies, built, offsets, attached["attachment_nodes"]),
-        **attached)
+        **attached, term_tables=tuple(term.pack(scene, built, offsets) for term in TERMS))
     # Numba compiles a kernel once per layout of its arguments: one Fortran-ordered table (a
     # cloth's triangles) compiled every kernel a second time.
     arrays = ModelArrays(*(np.ascontiguousarray(a) if isinstance(a, np.ndarray) else a

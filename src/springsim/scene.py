@@ -43,6 +43,8 @@ class Scene:
     wind: Wind | None = None              # moving air (wind.py); unset: still air, no force
     # particles of one body bound to another's surface (attachments.py)
     attachments: list[Attachment] = field(default_factory=list)
+    # forces of the kinds in terms/ that a scene adds by name (``[[forces]]``, a ``type`` each)
+    forces: list = field(default_factory=list, metadata={"typed_list": True})
 
     def validate(self) -> None:
         from .integrators import integrator_names
@@ -64,6 +66,8 @@ class Scene:
             check_follows(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
             check_rivets(getattr(body, "pins", ()), self.terrains, f"bodies.{i}.pins")
         validate_attachments(self.attachments, len(self.bodies))
+        for f, force in enumerate(self.forces):
+            force.validate(f"forces.{f}", len(self.bodies))
         self.validate_implicit_settings()
         if self.wind is not None:
             self.wind.validate("wind")

@@ -20,6 +20,7 @@ from .bodies.cloth import Cloth
 from .bodies.cube import Cube
 from .bodies.mesh import MeshBody
 from .errors import SceneError, require
+from .terms import FORCE_TYPES
 from .terrains import TERRAIN_TYPES
 
 
@@ -27,7 +28,8 @@ BODY_TYPES = {"cube": Cube, "cloth": Cloth, "balls": Balls, "mesh": MeshBody}
 
 
 # Scene fields that hold a list of tables, each with a ``type`` chosen from a registry.
-TYPED_LISTS = {"bodies": ("body", BODY_TYPES), "terrains": ("terrain", TERRAIN_TYPES)}
+TYPED_LISTS = {"bodies": ("body", BODY_TYPES), "terrains": ("terrain", TERRAIN_TYPES),
+               "forces": ("force", FORCE_TYPES)}
 
 
 def merge_table(base, table, prefix: str):

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..attachments import HOLD_SWEEPS, HOLD_TOLERANCE
-from .terms import AdjointTerm
+from ..terms.adjoint import AdjointTerm
 
 
 def soft(physical) -> np.ndarray:

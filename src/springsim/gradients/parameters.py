@@ -134,13 +134,20 @@ def check_covered(key, model, changed):
     for field in model.arrays._fields:
         if field in COVERED or field in WORK_SPACE:
             continue
-        old, new = getattr(model.arrays, field), getattr(changed.arrays, field)
-        if np.shape(old) != np.shape(new) or not np.array_equal(old, new, equal_nan=True):
+        if not same_values(getattr(model.arrays, field), getattr(changed.arrays, field)):
             raise SceneError("wrt", key, f"is not differentiable: it changes the model's "
                              f"{field}, which the gradient does not follow")
     if not np.array_equal(model.arrays.springs, changed.arrays.springs) or \
             not np.array_equal(model.pinned, changed.pinned):
         raise SceneError("wrt", key, "is not differentiable: it changes the springs or pins")
+
+
+def same_values(old, new) -> bool:
+    """Whether two model fields hold the same numbers (the terms' tables field by field)."""
+    if isinstance(old, tuple):
+        return (isinstance(new, tuple) and len(old) == len(new)
+                and all(same_values(a, b) for a, b in zip(old, new)))
+    return np.shape(old) == np.shape(new) and np.array_equal(old, new, equal_nan=True)
 
 
 def get_path(node, parts):

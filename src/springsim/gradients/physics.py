@@ -67,6 +67,7 @@ class Physical(NamedTuple):
     attachment_stiffness: np.ndarray  # (A,) N/m, 0 for a hard binding
     attachment_damping: np.ndarray    # (A,) N s/m
     bodies: Bodies = NO_BODIES        # the contact arrays of body-body contact (body_contact.py)
+    term_tables: tuple = ()           # the terms' own tables (terms/base.py), as the model's
 
     @classmethod
     def of(cls, model) -> "Physical":
@@ -90,7 +91,8 @@ class Physical(NamedTuple):
                    arrays.attachment_nodes.astype(np.int64),
                    arrays.attachment_weights.astype(float),
                    arrays.attachment_stiffness.astype(float),
-                   arrays.attachment_damping.astype(float), Bodies.of(arrays))
+                   arrays.attachment_damping.astype(float), Bodies.of(arrays),
+                   arrays.term_tables)
 
     def differentiable(self, name: str) -> np.ndarray:
         """The numbers Cotangents.``name`` is the cotangent of: a field, or one of the contact

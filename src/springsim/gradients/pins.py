@@ -19,7 +19,7 @@ import numpy as np
 from ..motion import (ANGULAR_VELOCITY_PART, CENTRE_PART, CENTRE_VELOCITY_PART, PIVOT_PART, POSE,
                       ROTATION_PART, pose_into)
 from .clock import FORCE_TIME
-from .terms import AdjointTerm
+from ..terms.adjoint import AdjointTerm
 
 
 def soft(physical):

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..wind import DENSITY, DRAG, FRICTION, ON, STRENGTH
 from .clock import FORCE_TIME
-from .terms import AdjointTerm
+from ..terms.adjoint import AdjointTerm
 
 STEP = 1e-30        # the complex step: far below rounding, so f(z + i STEP) has no error in f
 TWO_NINTHS = 2.0 / 9.0

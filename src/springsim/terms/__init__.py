@@ -6,10 +6,10 @@ integrators call (dispatch.py) are then generated over the registered terms, in 
 import importlib
 import pkgutil
 
-from .base import TERMS, Term, register, registered_terms
+from .base import FORCE_TYPES, TERMS, Term, register, registered_terms
 
 for _module in pkgutil.iter_modules(__path__):
-    if _module.name not in ("base", "dispatch"):
+    if _module.name not in ("adjoint", "base", "dispatch"):
         importlib.import_module(f"{__name__}.{_module.name}")
 registered_terms()
 
@@ -19,5 +19,5 @@ add_external_forces = build_loop("add_external_forces", TERMS)
 add_step_end_forces = build_loop("add_step_end_forces", TERMS)
 add_external_jacobians = build_loop("add_external_jacobians", TERMS)
 
-__all__ = ["TERMS", "Term", "register", "add_external_forces", "add_step_end_forces",
+__all__ = ["FORCE_TYPES", "TERMS", "Term", "register", "add_external_forces", "add_step_end_forces",
            "add_external_jacobians"]
