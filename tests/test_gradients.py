@@ -437,7 +437,8 @@ def test_the_far_test_bounds_what_it_stands_for():
     out), a sphere's the same through its own distance, and the speed a bound on the fastest
     particle's, at most sqrt(3) times it."""
     from springsim.gradients.contact import reach
-    from springsim.gradients.terrain_shapes import Flat, Round
+    from springsim.terrains.plane import Flat
+    from springsim.terrains.sphere import Round
 
     rng = np.random.default_rng(5)
     x, v = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))

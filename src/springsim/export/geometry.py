@@ -14,8 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..meshfiles import is_closed
-from ..render.terrain_meshes import bowl_mesh, plane_basis, sphere_mesh
-from ..terrains import Bowl, MeshTerrain, Plane, Sphere
+from ..terrains.display import sphere_mesh
 
 BALL_LATITUDES, BALL_LONGITUDES = 8, 16     # a ball's sphere in a point cache: 114 vertices
 
@@ -125,45 +124,12 @@ class TerrainPiece(NamedTuple):
 
 
 def terrain_meshes(layout, positions) -> list[TerrainPiece]:
-    """A TerrainPiece for every terrain the layout knows a display mesh for."""
+    """A TerrainPiece for every terrain whose kind has an export mesh (its ``export_mesh``:
+    terrains/base.py), under the whole motion ``positions`` (F, P, 3)."""
     meshes = []
     for number, terrain in enumerate(layout.terrains):
-        make = next((DISPLAY_MESHES[cls] for cls in type(terrain).__mro__
-                     if cls in DISPLAY_MESHES), None)
-        if make is not None:
+        mesh = terrain.export_mesh(positions)
+        if mesh is not None:
             name = f"terrain_{number}_{type(terrain).__name__.lower()}"
-            meshes.append(TerrainPiece(name, *make(terrain, positions), terrain))
+            meshes.append(TerrainPiece(name, *mesh, terrain))
     return meshes
-
-
-def plane_quad(plane, positions):
-    """A square of the plane under the whole motion: ten times its size, and at least 20 m."""
-    points = positions.reshape(-1, 3)
-    low, high = points.min(axis=0), points.max(axis=0)
-    half = max(10.0 * float(np.max(high - low)), 10.0)
-    normal = plane.unit_normal()
-    centre = (low + high) / 2
-    centre = centre - ((centre - np.asarray(plane.point, float)) @ normal) * normal
-    u, w = plane_basis(normal)                 # u x w = normal: counter-clockwise seen from it
-    corners = [centre + half * (su * u + sw * w) for su, sw in ((-1, -1), (1, -1), (1, 1),
-                                                                 (-1, 1))]
-    return np.asarray(corners), np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def sphere_display(sphere, positions):
-    return sphere_mesh(sphere.center, sphere.radius)
-
-
-def bowl_display(bowl, positions):
-    return bowl_mesh(bowl.center, bowl.radius)
-
-
-def mesh_display(terrain, positions):
-    shape = terrain.display_mesh(None, 0.0)   # the mesh itself, wherever the bodies are
-    return shape.vertices, shape.triangles
-
-
-# Display meshes by terrain class (the most derived class found wins: a Bowl is a Sphere).
-DISPLAY_MESHES = {Plane: plane_quad, Sphere: sphere_display, Bowl: bowl_display,
-                  MeshTerrain: mesh_display}
-

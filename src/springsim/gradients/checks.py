@@ -29,8 +29,8 @@ def check_supported(simulation) -> None:
 
 def contact_check(simulation, physical=None):
     """A function ``check(step, (x, v))`` that refuses a state in which some particle is within
-    the contact band of a terrain the adjoint does not follow (a kind with no shape in
-    terrain_shapes.SHAPES: every built-in kind has one), or would be within the step, as
+    the contact band of a terrain the adjoint does not follow (a kind whose ``adjoint_shape``
+    is None: every built-in kind has one), or would be within the step, as
     implicit_euler's constraints look ahead; None if it follows them all. Such a terrain
     neither moves nor deforms (both are the built-in kinds' own). The backward pass calls it on
     every step's start."""

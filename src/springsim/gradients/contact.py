@@ -35,7 +35,7 @@ import numpy as np
 from ..terrains.deforming_mesh import REACH
 from .clock import at_time
 from .kernels import largest_component
-from .terrain_shapes import Deforming, Flat, Moving, shape_of, surface_velocity
+from .terrain_shapes import Deforming, Flat, Moving, surface_velocity
 
 
 class Planes(NamedTuple):
@@ -56,7 +56,7 @@ class Planes(NamedTuple):
         for t, terrain in enumerate(model.terrains):
             row = arrays.terrain_parameters[t]
             motion, deforming = arrays.terrain_motion[t], arrays.terrain_deforming[t]
-            shape = (shape_of(terrain, row) if deforming < 0
+            shape = (terrain.adjoint_shape(row) if deforming < 0
                      else Deforming(terrain.deforming_surface(), clock,
                                     float(arrays.terrain_data[deforming + REACH])))
             if shape is not None and motion >= 0 and deforming < 0:

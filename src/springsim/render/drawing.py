@@ -212,8 +212,9 @@ class _TerrainDrawing:
         self.shape = shape
         self.mesh = ps.register_surface_mesh(self.name, shape.vertices, shape.triangles,
                                              color=color, smooth_shade=shape.smooth)
-        if shape.face_colors is not None:
-            self.mesh.add_color_quantity("checker", shape.face_colors, defined_on="faces",
+        if shape.checker is not None:
+            face_colors = np.asarray(colors.TERRAIN_CHECKER_COLORS)[shape.checker]
+            self.mesh.add_color_quantity("checker", face_colors, defined_on="faces",
                                          enabled=True)
         if shape.cull_back:
             self.mesh.set_back_face_policy("cull")

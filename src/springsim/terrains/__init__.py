@@ -4,10 +4,12 @@ Each terrain has a signed distance ``phi`` (positive on the free side, in m) and
 pointing to the free side. A particle touches when ``phi`` is below the contact band ``epsilon``.
 
 A terrain kind is one file of this package (plane.py, sphere.py, bowl.py, mesh.py). It supplies
-a dataclass with ``validate``, its Numba distance-and-normal kernel, the NumPy twin of that kernel
-(``signed_distance``), its display mesh and the points that bound it for cameras, and registers
-them with ``base.register``. Files are found by listing the package, so a new kind touches no
-other file.
+one dataclass, registered with ``base.register``, that carries all of the kind: ``validate``,
+its Numba distance-and-normal kernel, the NumPy twin of that kernel (``signed_distance``), the
+kernel's derivatives for the gradients' adjoint (``adjoint_shape``), the mesh drawn
+(``display_mesh``) and exported (``export_mesh``) and the points that bound it for cameras
+(base.py lists them). Files are found by listing the package, so a new kind touches no other
+file. The meshes' geometry is display.py's, which the renderer and the exporters import too.
 
 How the kernels are dispatched, and why so. Every terrain packs into one row of a uniform
 parameter table (T, K) float64, plus its share of one data buffer (a mesh's distance grid); the

@@ -10,8 +10,16 @@ the kind in lists and menus. The class provides:
 - ``pack(data_start) -> (row, data)``: its parameters (at most PARAMETERS numbers) and its part of
   the data buffer, which will start at ``data_start``;
 - ``signed_distance(x, radius=0.0)``: the NumPy twin of the kernel, for (n, 3) points;
-- ``display_mesh(near, extent) -> render.terrain_meshes.TerrainMesh``: what is drawn, given the
-  bodies' middle and size;
+- ``adjoint_shape(row)``: the kernel as differentiable NumPy for the gradients' contact adjoint
+  (gradients/contact.py): an object with ``distance(x, offset)``, ``normals(x)``,
+  ``gradient(x)`` (grad phi) and ``curvature(x)`` ((dn/dx)^T per point, or None where it is
+  zero), computing the kernel's bits from its row of the parameter table (the kind's file
+  defines it: plane.Flat, sphere.Round, mesh.Gridded); ``Contact``'s gives None, a kind the
+  adjoint does not follow;
+- ``display_mesh(near, extent) -> display.TerrainMesh``: what is drawn, given the bodies' middle
+  and size;
+- ``export_mesh(positions) -> (vertices, triangles)``: what an exporter writes (export/geometry.py),
+  given every particle at every frame (..., 3); ``Contact``'s gives None, nothing written;
 - ``points_near(corners, size)``: points of the terrain under a box, for cameras;
 - ``validate(key)``, and the contact settings of ``Contact``;
 - optionally ``look_ahead = True``: the kernel is long (a mesh's grid), and the contact kernel
@@ -90,6 +98,14 @@ class Contact:
         """Points of the terrain as placed (n, 3), whose travel in a step bounds its surface's
         (substeps.py); none for a terrain of infinite thickness."""
         return np.zeros((0, 3))
+
+    def adjoint_shape(self, row):
+        """Its shape for the gradients' contact adjoint (module doc); None: not followed."""
+        return None
+
+    def export_mesh(self, positions):
+        """(vertices, triangles) an exporter writes (module doc); None: nothing."""
+        return None
 
     def vertices_at(self, vertices, t: float) -> np.ndarray:
         """Its display mesh's ``vertices`` where they are at time t."""

@@ -7,7 +7,8 @@ import numpy as np
 
 from .._jit import kernel
 from .base import register
-from .sphere import Sphere, outward
+from .display import TerrainMesh, bowl_mesh, sphere_points_near
+from .sphere import Round, Sphere, outward
 
 
 @kernel
@@ -32,16 +33,18 @@ class Bowl(Sphere):
     def signed_distance(self, x: np.ndarray, radius=0.0) -> np.ndarray:
         return self.radius - np.linalg.norm(x - np.asarray(self.center, float), axis=-1) - radius
 
+    def adjoint_shape(self, row) -> Round:
+        return Round(row[0:3].copy(), float(row[3]), -1.0)
+
     def display_mesh(self, near, extent: float):
         """The lower half, facing the centre, back faces culled: the near wall disappears from
         any viewpoint and the body inside stays in sight."""
-        from ..render.terrain_meshes import TerrainMesh, bowl_mesh
-
         return TerrainMesh(*bowl_mesh(self.center, self.radius), color="bowl", cull_back=True)
 
-    def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
-        from ..render.terrain_meshes import sphere_points_near
+    def export_mesh(self, positions):
+        return bowl_mesh(self.center, self.radius)
 
+    def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
         return sphere_points_near(self.center, self.radius, corners, size, lower_half=True)
 
     def menu_name(self) -> str:

@@ -25,6 +25,7 @@ import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_
 from ..animation import Animation
 from .base import Contact, register
 from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
+from .display import TerrainMesh
 
 PROBES = 512   # a moving mesh's vertices whose travel bounds its surface's (substeps.py)
 
@@ -48,8 +50,8 @@ def trilinear(c000, c001, c010, c011, c100, c101, c110, c111, fu, fv, fw):
     """The trilinear function of a cell's corner values c_abd at the fractions (fu, fv, fw):
     (phi, its gradient in cells gu, gv, gw, then the mixed second derivatives d2/du dv,
     d2/du dw, d2/dv dw; it has no pure ones). Scalars in the kernels; NumPy arrays through
-    ``trilinear.py_func`` in the gradients' contact (gradients/terrain_shapes.py), which so
-    computes the kernel's bits."""
+    ``trilinear.py_func`` in the adjoint shape (``trilinear_pieces``), which so computes the
+    kernel's bits."""
     c00, c01 = c000 + fu * (c100 - c000), c001 + fu * (c101 - c001)
     c10, c11 = c010 + fu * (c110 - c010), c011 + fu * (c111 - c011)
     c0, c1 = c00 + fv * (c10 - c00), c01 + fv * (c11 - c01)
@@ -257,14 +259,21 @@ class MeshTerrain(Contact):
         grid = self.grid()
         return grid.row(data_start), grid.values
 
-    def display_mesh(self, near, extent: float):
-        from ..render.terrain_meshes import TerrainMesh
+    def adjoint_shape(self, row) -> "Gridded":
+        """The still mesh's grid (a deforming one's shape is gradients/terrain_shapes.Deforming);
+        row: DistanceGrid.row, whose values the cached grid holds."""
+        return Gridded(row[0:3].copy(), float(row[8]), self.grid().values)
 
+    def display_mesh(self, near, extent: float):
         if self.animation is not None:
             surface = self.deforming_surface()
             return TerrainMesh(surface_at(surface, 0.0), surface.triangles, two_sided=True)
         mesh = self.mesh()
         return TerrainMesh(mesh.vertices, mesh.triangles, two_sided=True)
+
+    def export_mesh(self, positions):
+        shape = self.display_mesh(None, 0.0)   # the mesh itself, wherever the bodies are
+        return shape.vertices, shape.triangles
 
     def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
         """The mesh's vertices under the bodies' box (grown by its size), or its box's corners
@@ -277,6 +286,79 @@ class MeshTerrain(Contact):
         box_low, box_high = vertices.min(axis=0), vertices.max(axis=0)
         return np.array([[x, y, z] for x in (box_low[0], box_high[0])
                          for y in (box_low[1], box_high[1]) for z in (box_low[2], box_high[2])])
+
+
+class Gridded(NamedTuple):
+    """A still mesh's adjoint shape: its signed distance grid, trilinear in each cell as
+    ``mesh_distance`` interpolates it, with the kernel's arithmetic: phi, the normal (the
+    gradient's direction), the gradient, and the normal's derivative from the trilinear
+    function's mixed second derivatives (it has no pure ones). Beyond the grid (free space,
+    never touched) the normal points away from it and the curvature is zero."""
+
+    origin: np.ndarray
+    inverse: float          # 1 / the cell size
+    values: np.ndarray      # (n0, n1, n2)
+
+    def cells(self, x):
+        """(the trilinear pieces, the offset beyond the grid in cells (K, 3))."""
+        n = np.array(self.values.shape)
+        u = (x - self.origin) * self.inverse
+        clamped = np.minimum(np.maximum(u, 0.0), n - 1.0)
+        index = np.minimum(clamped.astype(np.int64), n - 2)
+        f = clamped - index
+        i, j, k = index.T
+        c = {(a, b, d): self.values[i + a, j + b, k + d]
+             for a in (0, 1) for b in (0, 1) for d in (0, 1)}
+        return trilinear_pieces(c, f[:, 0], f[:, 1], f[:, 2]), u - clamped
+
+    def distance(self, x, offset):
+        (phi, _, _), beyond = self.cells(x)
+        outside = np.linalg.norm(beyond, axis=1)
+        return np.where(outside > 0.0, outside / self.inverse + np.maximum(phi, 0.0), phi) \
+            - offset
+
+    def gradient(self, x):
+        (_, g, _), beyond = self.cells(x)
+        return np.where(np.any(beyond != 0.0, axis=1)[:, None], unit_normal(g, beyond),
+                        g * self.inverse)
+
+    def normals(self, x):
+        (_, g, _), beyond = self.cells(x)
+        return unit_normal(g, beyond)
+
+    def curvature(self, x):
+        """(dn/dx)^T = H (I - n n^T) / (|g| cell), H the cell's mixed second derivatives."""
+        (_, g, hessian), beyond = self.cells(x)
+        size = np.linalg.norm(g, axis=1)
+        n = g / np.where(size > 0.0, size, 1.0)[:, None]
+        projector = np.eye(3) - n[:, :, None] * n[:, None, :]
+        scale = np.where((size > 0.0) & ~np.any(beyond != 0.0, axis=1),
+                         self.inverse / np.where(size > 0.0, size, 1.0), 0.0)
+        return scale[:, None, None] * np.einsum("kij,kjl->kil", hessian, projector)
+
+
+def unit_normal(g, beyond):
+    """mesh_distance's normal: g / |g| ((0, 1, 0) where g is zero), or away from the grid
+    beyond it."""
+    size = np.linalg.norm(g, axis=1)
+    n = np.where(size[:, None] > 0.0, g / np.where(size > 0.0, size, 1.0)[:, None],
+                 np.array([0.0, 1.0, 0.0]))
+    outside = np.linalg.norm(beyond, axis=1)
+    away = beyond / np.where(outside > 0.0, outside, 1.0)[:, None]
+    return np.where(outside[:, None] > 0.0, away, n)
+
+
+def trilinear_pieces(c, fu, fv, fw):
+    """(phi, its gradient in cells (K, 3), its second derivatives (K, 3, 3)) of the trilinear
+    function with corner values c[(a, b, d)] at the fractions (fu, fv, fw): the kernel's own
+    arithmetic (``trilinear``), on arrays."""
+    phi, gu, gv, gw, uv, uw, vw = trilinear.py_func(
+        c[0, 0, 0], c[0, 0, 1], c[0, 1, 0], c[0, 1, 1], c[1, 0, 0], c[1, 0, 1], c[1, 1, 0],
+        c[1, 1, 1], fu, fv, fw)
+    zero = np.zeros_like(phi)
+    hessian = np.stack([np.stack([zero, uv, uw], -1), np.stack([uv, zero, vw], -1),
+                        np.stack([uw, vw, zero], -1)], -2)
+    return phi, np.stack([gu, gv, gw], -1), hessian
 
 
 @functools.lru_cache(maxsize=8)

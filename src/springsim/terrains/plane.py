@@ -1,12 +1,15 @@
 """The plane ``phi = n . (x - p)``, and the reference's tilted plane (a Plane through the origin
 with normal (1, 1, 0), normalized: the course framework forgot to)."""
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import kernel
 from ..errors import is_finite, require
 from .base import Contact, register
+from .display import plane_display_mesh, plane_quad
 
 
 @kernel
@@ -44,12 +47,17 @@ class Plane(Contact):
     def pack(self, data_start: int, largest_offset: float = 0.0):
         return [*np.asarray(self.point, float), *self.unit_normal()], np.empty(0)
 
+    def adjoint_shape(self, row) -> "Flat":
+        return Flat(row[0:3].copy(), row[3:6].copy())
+
     def display_mesh(self, near, extent: float):
         """A checkered square patch under the bodies, moved along when they leave its middle
         (a plane is infinite)."""
-        from ..render.terrain_meshes import plane_display_mesh
-
         return plane_display_mesh(self.point, self.unit_normal(), near, extent)
+
+    def export_mesh(self, positions):
+        """One square under the whole motion (display.plane_quad)."""
+        return plane_quad(self.point, self.unit_normal(), positions)
 
     def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
         return corners - np.outer(self.signed_distance(corners), self.unit_normal())
@@ -57,6 +65,45 @@ class Plane(Contact):
     def menu_name(self) -> str:
         """The viewer's terrain button this plane is (the course framework's two planes)."""
         return "plane" if self.unit_normal()[1] > 0.999 else "tilted plane"
+
+
+class Flat(NamedTuple):
+    """A plane's adjoint shape: phi = n . (x - p) - offset, the same normal everywhere."""
+
+    point: np.ndarray
+    normal: np.ndarray
+
+    def distance(self, x, offset):
+        p, n = self.point, self.normal
+        return ((x[:, 0] - p[0]) * n[0] + (x[:, 1] - p[1]) * n[1] + (x[:, 2] - p[2]) * n[2]
+                - offset)
+
+    def normals(self, x):
+        return np.broadcast_to(self.normal, x.shape)
+
+    def least_distance(self, x, offset, free):
+        """The least distance of a free particle, in one compiled pass (a bound for the
+        adjoint's far test, gradients/contact.reach, where distance's rounding does not
+        matter)."""
+        return least_height(x, self.normal, offset, free) - float(self.point @ self.normal)
+
+    def gradient(self, x):
+        return self.normals(x)
+
+    def curvature(self, x):
+        """(dn/dx)^T per particle (K, 3, 3); None where it is zero everywhere."""
+        return None
+
+
+@kernel
+def least_height(x, normal, offset, free):
+    """The least n . x - offset of a free particle (inf where none is free)."""
+    least = math.inf
+    for i in range(x.shape[0]):
+        if free[i]:
+            height = x[i, 0] * normal[0] + x[i, 1] * normal[1] + x[i, 2] * normal[2] - offset[i]
+            least = min(least, height)
+    return least
 
 
 def tilted_plane(**overrides) -> Plane:

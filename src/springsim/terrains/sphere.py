@@ -2,12 +2,14 @@
 ``(x - c)/|x - c|``."""
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import kernel
 from ..errors import is_finite, require
 from .base import Contact, register
+from .display import TerrainMesh, sphere_mesh, sphere_points_near
 
 
 @kernel
@@ -64,18 +66,51 @@ class Sphere(Contact):
     def pack(self, data_start: int, largest_offset: float = 0.0):
         return [*np.asarray(self.center, float), float(self.radius)], np.empty(0)
 
-    def display_mesh(self, near, extent: float):
-        from ..render.terrain_meshes import TerrainMesh, sphere_mesh
+    def adjoint_shape(self, row) -> "Round":
+        return Round(row[0:3].copy(), float(row[3]), 1.0)
 
+    def display_mesh(self, near, extent: float):
         return TerrainMesh(*sphere_mesh(self.center, self.radius))
 
-    def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
-        from ..render.terrain_meshes import sphere_points_near
+    def export_mesh(self, positions):
+        return sphere_mesh(self.center, self.radius)
 
+    def points_near(self, corners: np.ndarray, size: float) -> np.ndarray:
         return sphere_points_near(self.center, self.radius, corners, size, lower_half=False)
 
     def menu_name(self) -> str:
         return "sphere"
+
+
+class Round(NamedTuple):
+    """A sphere's adjoint shape, its outside (side +1) or inside (side -1, a bowl):
+    phi = side (|x - c| - R) - offset, n = side (x - c) / |x - c|, and at the very centre
+    n = side (0, 1, 0), as the kernels choose."""
+
+    center: np.ndarray
+    radius: float
+    side: float
+
+    def distance(self, x, offset):
+        return self.side * (np.linalg.norm(x - self.center, axis=1) - self.radius) - offset
+
+    def normals(self, x):
+        d = x - self.center
+        length = np.linalg.norm(d, axis=1)
+        unit = np.where(length[:, None] > 0.0, d / np.where(length > 0.0, length, 1.0)[:, None],
+                        np.array([0.0, 1.0, 0.0]))
+        return self.side * unit
+
+    def gradient(self, x):
+        return self.normals(x)
+
+    def curvature(self, x):
+        d = x - self.center
+        length = np.linalg.norm(d, axis=1)
+        safe = np.where(length > 0.0, length, 1.0)
+        unit = d / safe[:, None]
+        projector = np.eye(3) - unit[:, :, None] * unit[:, None, :]
+        return (self.side * np.where(length > 0.0, 1.0 / safe, 0.0))[:, None, None] * projector
 
 
 register(Sphere, {"sphere": Sphere}, order=1)

@@ -10,19 +10,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+# What a contact of the solve is (SolveContacts.shape), and a ball contact's passes: the narrow
+# phase's, which builds the stencils (defined there so that it need not import this package)
+from ..narrow_phase import (BALL_PASSES, BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE,  # noqa: F401
+                            EDGE_EDGE, POINT_TRIANGLE)
+
 # The contacts after the step (after_step.py): their parameters
 PASSES = 8          # Jacobi passes of the velocity impulses per step
 CORRECTION = 0.5    # share of an overlap removed per step
-BALL_PASSES = 1     # Jacobi passes of a ball's contacts (narrow_phase/after_step.py says why)
 PARAMS = 6          # numbers per contact: restitution, kinetic and static friction, share of
                     # the depth corrected, share of a stuck sliding taken back, passes
-
-# What a contact of the solve is (its ``shape``): how its weights and normal are found
-BALL_POINT = 0       # a ball (node 0) and a point (node 1): c = (1, -1, 0, 0)
-BALL_TRIANGLE = 1    # a ball and a sheet triangle: c = (1, -w_0, -w_1, -w_2)
-POINT_TRIANGLE = 2   # a surface point and a surface triangle: c = (1, -w_0, -w_1, -w_2)
-EDGE_EDGE = 3        # two surface edges: c = (1 - s, s, -(1 - t), -t)
-BALL_SAMPLE = 4      # a ball and a sheet triangle's centre: c = (1, -1/3, -1/3, -1/3)
 
 
 class ImpulseContacts(NamedTuple):

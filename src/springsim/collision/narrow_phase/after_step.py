@@ -23,8 +23,8 @@ the Coulomb share of the sliding removed.
 import math
 
 from ..._jit import inline_kernel
-from ..contact_sets import BALL_PASSES
 from ..distance.closest_points import triangle_normal
+from . import BALL_PASSES
 from .stencils import edge_edge_stencil, point_triangle_stencil
 
 

@@ -1,8 +1,13 @@
-"""Triangle meshes of the terrains (plain NumPy): what a terrain kind's ``display_mesh`` gives.
+"""Triangle meshes of the terrains (plain NumPy): what a terrain kind's ``display_mesh`` (drawn,
+render/) and ``export_mesh`` (written, export/) give, and the sphere meshes of balls.
+
+Geometry only: the renderer colours these meshes (render/colors.py) and the exporters write them,
+and both import this module, never the other way round.
 
 Planes are infinite, so what is drawn is a square patch centred near the bodies; its checker
 cells are anchored to the plane's point so that the pattern stays put when the patch is moved,
-and a sliding body is seen to move over it.
+and a sliding body is seen to move over it. What is exported is one square under the whole
+motion (``plane_quad``).
 """
 import math
 from dataclasses import dataclass
@@ -18,7 +23,7 @@ class TerrainMesh:
 
     vertices: np.ndarray
     triangles: np.ndarray
-    face_colors: np.ndarray | None = None   # (T, 3) RGB, or one colour for all
+    checker: np.ndarray | None = None       # (T,) 0 or 1: a checker's cells, or one colour for all
     color: str = "terrain"                  # "terrain" or "bowl" (render.colors)
     cull_back: bool = False                 # hide faces seen from behind (a bowl's near wall)
     two_sided: bool = False                 # both sides lit alike (an open mesh)
@@ -38,14 +43,12 @@ class TerrainMesh:
 def plane_display_mesh(point, normal, near, extent: float) -> TerrainMesh:
     """A checkered patch, with cells about a quarter of the bodies' ``extent`` (a power of 10)
     and ten times their extent across, that moves along once they leave its middle third."""
-    from .colors import TERRAIN_CHECKER_COLORS
-
     cell = float(10.0 ** np.round(np.log10(max(extent, 1e-3) / 4)))
     half_size = max(40.0 * cell, 10.0 * extent)
     vertices, triangles, checker = plane_patch(point, normal, near, half_size, cell)
     n = np.asarray(normal, float) / np.linalg.norm(normal)
-    return TerrainMesh(vertices, triangles, np.asarray(TERRAIN_CHECKER_COLORS)[checker],
-                       smooth=False, center=vertices.mean(axis=0), normal=n, recentre_distance=half_size / 3)
+    return TerrainMesh(vertices, triangles, checker, smooth=False, center=vertices.mean(axis=0),
+                       normal=n, recentre_distance=half_size / 3)
 
 
 def sphere_points_near(center, radius: float, corners: np.ndarray, size: float,
@@ -107,6 +110,20 @@ def plane_patch(point, normal, near, half_size: float, cell: float):
     i, j = np.indices((count - 1, count - 1))
     parity = ((i + j) % 2).ravel()
     return vertices.reshape(-1, 3), triangles, np.concatenate([parity, parity])
+
+
+def plane_quad(point, normal, positions):
+    """(vertices, triangles) of a square of the plane under the whole motion (``positions``
+    (..., 3), every particle at every frame): ten times its size, and at least 20 m."""
+    points = positions.reshape(-1, 3)
+    low, high = points.min(axis=0), points.max(axis=0)
+    half = max(10.0 * float(np.max(high - low)), 10.0)
+    centre = (low + high) / 2
+    centre = centre - ((centre - np.asarray(point, float)) @ normal) * normal
+    u, w = plane_basis(normal)                 # u x w = normal: counter-clockwise seen from it
+    corners = [centre + half * (su * u + sw * w) for su, sw in ((-1, -1), (1, -1), (1, 1),
+                                                                 (-1, 1))]
+    return np.asarray(corners), np.array([[0, 1, 2], [0, 2, 3]])
 
 
 def latitude_mesh(center, radius: float, polar_angles, longitudes: int = 64):
