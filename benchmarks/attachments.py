@@ -13,7 +13,7 @@ import trimesh
 from numba import njit
 
 from springsim.attachments import nearest_triangles
-from springsim.collision.distance.closest_points import closest_on_triangle
+from springsim.geometry.closest_points import closest_on_triangle
 
 
 @njit

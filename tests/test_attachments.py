@@ -223,7 +223,7 @@ def test_nearest_triangles_agree_with_a_search_of_every_pair():
     import trimesh
 
     from springsim.attachments import nearest_triangles
-    from springsim.collision.distance.closest_points import closest_on_triangle
+    from springsim.geometry.closest_points import closest_on_triangle
 
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     corners = np.ascontiguousarray(sphere.vertices[sphere.faces], float)

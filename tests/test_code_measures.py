@@ -9,20 +9,6 @@ import pytest
 
 SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "code_measures.py"
 
-# The one package cycle left, at the top level, and the packages and modules in it: the terrain
-# contact response (collision/response/terrain.py) reads the world's terrain kernels (world.py)
-# and the terrains, while the world, the bodies, the rivets (through attachments.py) and the
-# deforming terrains read collision's closest points and contact settings: collision is both
-# below and above them. Breaking it moves the terrain response, or the world's terrain kernels,
-# out of one side, which edits forces.py, world.py and the integrators, another change of
-# issue 54; once it is broken this entry must go (the test asserts the cycles found are exactly
-# these).
-KNOWN_PACKAGE_CYCLES = {
-    (1, frozenset({"springsim.attachments", "springsim.bodies", "springsim.collision",
-                   "springsim.rivets", "springsim.terrains", "springsim.world"})),
-}
-
-
 @pytest.fixture(scope="module")
 def measures():
     spec = importlib.util.spec_from_file_location("code_measures", SCRIPT)
@@ -86,9 +72,7 @@ def test_no_import_cycle_between_modules(measures):
 def test_no_import_cycle_between_packages(measures):
     modules = measures.read_modules()
     graph = measures.module_graph(modules)
-    found = {(depth, frozenset(component))
-             for depth, _, component in measures.package_components(modules, graph)}
-    assert found == KNOWN_PACKAGE_CYCLES
+    assert measures.package_components(modules, graph) == []
 
 
 def test_no_terrain_module_imports_the_renderer_or_the_gradients(measures):

@@ -36,7 +36,7 @@ import numpy as np
 
 from ._jit import kernel
 from .bodies.pins import Region, check_choice, chosen_particles, describe, start_hint
-from .collision.distance.closest_points import closest_on_triangle
+from .geometry.closest_points import closest_on_triangle
 from .collision.shapes.surfaces import collision_triangles
 from .errors import SceneError, is_finite, require
 

@@ -29,8 +29,8 @@
                    the Jacobi impulse passes with mass splitting and the overlap correction;
                    penalty.py, contacts as one-sided springs of the implicit solve;
                    solve_friction.py, Coulomb friction of those springs
-    distance/      closest points and distances between a point, a triangle and segments,
-                   used by every stage above
+    (the closest points and distances every stage measures with are ../geometry/, below the
+    terrains and attachments that use them too)
 
 pipeline.py runs the stages after every integrator's update (``resolve_contacts``):
 keep or renew the pair list, find the touching stencils, respond. Backward Euler also calls the

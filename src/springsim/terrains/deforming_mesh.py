@@ -43,7 +43,7 @@ import numpy as np
 
 from .._jit import inline_kernel, kernel
 from ..animation import Animation, interpolated_points
-from ..collision.distance.closest_points import closest_on_triangle
+from ..geometry.closest_points import closest_on_triangle
 from ..meshfiles import fan_triangles, first_file_vertex, read_mesh_file, weld
 from .base import register
 

@@ -23,7 +23,7 @@ the Coulomb share of the sliding removed.
 import math
 
 from ..._jit import inline_kernel
-from ..distance.closest_points import triangle_normal
+from ...geometry.closest_points import triangle_normal
 from . import BALL_PASSES
 from .stencils import edge_edge_stencil, point_triangle_stencil
 

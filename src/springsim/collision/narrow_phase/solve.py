@@ -15,7 +15,7 @@ triangle's edge, touch through the neighbouring contacts and are left inactive.
 import math
 
 from ..._jit import inline_kernel, kernel
-from ..distance.closest_points import triangle_normal
+from ...geometry.closest_points import triangle_normal
 from . import BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE, POINT_TRIANGLE
 from .stencils import edge_edge_stencil, point_triangle_stencil
 

@@ -13,7 +13,7 @@ and a call that passes arrays costs more than they do (_jit.inline_kernel).
 import math
 
 from ..._jit import inline_kernel, kernel
-from ..distance.closest_points import closest_on_segments, closest_on_triangle
+from ...geometry.closest_points import closest_on_segments, closest_on_triangle
 
 
 @inline_kernel

@@ -41,7 +41,7 @@ import numpy as np
 from ..._jit import kernel
 from ..broad_phase.grid import box_grid, region_cells
 from ..broad_phase.surfaces import joined
-from ..distance.closest_points import area_vector, triangle_normal
+from ...geometry.closest_points import area_vector, triangle_normal
 
 
 FACING = 1e-9     # a triangle faces the axis if its normal's cosine to it is above this

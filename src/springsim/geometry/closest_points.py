@@ -5,7 +5,7 @@ iteration of implicit_euler), where array temporaries would allocate.
 """
 import math
 
-from ..._jit import kernel
+from .._jit import kernel
 
 
 @kernel
