@@ -12,6 +12,8 @@ Integrator.advance takes the threaded kernel for a model of two PARTITION's wort
 or more (integrators/base.py), whatever its own ``spring_partition``; ``take_kernel`` makes
 these small models' steps take the threaded kernel, or the serial one, and records which ran.
 """
+from typing import NamedTuple
+
 import numpy as np
 import pytest
 
@@ -25,18 +27,27 @@ from springsim.scenefile import load_scene
 from springsim.spring_runs import PARTITION, partition_count
 
 THREADS = sorted({1, min(2, available_threads()), available_threads()})
-# (scene, its overrides, spring_partition, partitions): the longest spring (a cube's bend
-# spring, 2 N^2 = 72 particles apart; a cloth's, 2 N = 20) spans more than one partition
-MODELS = {"cube": ("jelly-plane", ["bodies.0.particles_per_edge=6"], 40, 5),
-          "cloth": ("cloth-balls", ["bodies.0.particles_per_edge=10"], 16, 6)}
+
+
+class SmallModel(NamedTuple):
+    scene: str
+    overrides: list
+    spring_partition: int
+    partitions: int   # what that cuts the model into
+
+
+# the longest spring (a cube's bend spring, 2 N^2 = 72 particles apart; a cloth's, 2 N = 20)
+# spans more than one partition
+MODELS = {"cube": SmallModel("jelly-plane", ["bodies.0.particles_per_edge=6"], 40, 5),
+          "cloth": SmallModel("cloth-balls", ["bodies.0.particles_per_edge=10"], 16, 6)}
 
 
 def small_model(name: str) -> Simulation:
     """The model ``name`` of MODELS on explicit Euler, every spring stretched and every damper
     working (random displacements and velocities); the cloth's balls pressed into it."""
-    scene, overrides, partition, _ = MODELS[name]
-    simulation = Simulation(load_scene(scene, overrides), integrator="explicit_euler", dt=1e-4,
-                            spring_partition=partition)
+    model = MODELS[name]
+    simulation = Simulation(load_scene(model.scene, model.overrides), integrator="explicit_euler",
+                            dt=1e-4, spring_partition=model.spring_partition)
     rng = np.random.default_rng(3)
     x, v = simulation.state.positions, simulation.state.velocities
     free = ~simulation.model.pinned
@@ -65,26 +76,26 @@ def take_kernel(monkeypatch, simulation, threaded: bool) -> list:
     return called
 
 
-def steps_from(simulation, start, threads: int, count: int) -> tuple:
-    """(positions, velocities) after ``count`` steps from ``start`` with ``threads`` threads."""
+def steps_from(simulation, start, threads: int, count: int):
+    """The state after ``count`` steps from ``start`` with ``threads`` threads."""
     simulation.state = start.copy()
     simulation.threads = threads
     simulation.step(count)
-    return simulation.state.positions.copy(), simulation.state.velocities.copy()
+    return simulation.state.copy()
 
 
 @pytest.mark.parametrize("name", MODELS)
 def test_the_small_models_are_cut_into_partitions(name):
-    simulation = small_model(name)
-    _, _, partition, partitions = MODELS[name]
+    simulation, model = small_model(name), MODELS[name]
     arrays, count = simulation.model.arrays, simulation.model.particle_count
-    assert arrays.spring_partition == partition and count >= 2 * partition
-    assert partition_count(count, arrays.spring_partition) == partitions
-    assert arrays.spring_runs[:, 1].max() > partition   # springs crossing partitions
+    assert arrays.spring_partition == model.spring_partition
+    assert count >= 2 * model.spring_partition
+    assert partition_count(count, arrays.spring_partition) == model.partitions
+    assert arrays.spring_runs[:, 1].max() > model.spring_partition   # crossing partitions
     assert partition_count(count) == 1   # by default, one partition
     assert (partition_count(51 ** 3), partition_count(50 ** 3)) == (2, 1)   # 132,651 and 125,000
-    scene, overrides, _, _ = MODELS[name]
-    assert Simulation(load_scene(scene, overrides)).model.arrays.spring_partition == PARTITION
+    default = Simulation(load_scene(model.scene, model.overrides))
+    assert default.model.arrays.spring_partition == PARTITION
 
 
 @pytest.mark.parametrize("name", MODELS)
@@ -106,11 +117,11 @@ def test_threaded_steps_are_bit_identical_to_serial_ones_for_any_number_of_threa
     serial = steps_from(simulation, start, 1, 3)
     called = take_kernel(monkeypatch, simulation, threaded=True)
     for threads in THREADS:
-        positions, velocities = steps_from(simulation, start, threads, 3)
-        assert np.array_equal(positions, serial[0])
-        assert np.array_equal(velocities, serial[1])
+        threaded = steps_from(simulation, start, threads, 3)
+        assert np.array_equal(threaded.positions, serial.positions)
+        assert np.array_equal(threaded.velocities, serial.velocities)
     assert called == [simulation.integrator.parallel_kernel] * len(THREADS)
-    assert not np.array_equal(serial[0], start.positions)   # it did move
+    assert not np.array_equal(serial.positions, start.positions)   # it did move
 
 
 def test_the_balls_pressed_into_the_cloth_are_pushed_back(monkeypatch):
@@ -120,7 +131,7 @@ def test_the_balls_pressed_into_the_cloth_are_pushed_back(monkeypatch):
     simulation = small_model("cloth")
     start = simulation.state.copy()
     take_kernel(monkeypatch, simulation, threaded=True)
-    _, velocities = steps_from(simulation, start, THREADS[-1], 3)
+    velocities = steps_from(simulation, start, THREADS[-1], 3).velocities
     balls = simulation.model.arrays.balls
     free_fall = -2.0 - 9.8 * 3 * simulation.dt
     assert np.all(velocities[balls, 1] > free_fall + 0.005)
@@ -155,13 +166,14 @@ def test_terrain_contact_is_bit_identical_for_any_number_of_threads(monkeypatch)
     start.velocities[:] = 0.0
     start.velocities[:, 1] = -2.0
     take_kernel(monkeypatch, simulation, threaded=False)
-    results = [steps_from(simulation, start, 1, 2)]
+    serial = steps_from(simulation, start, 1, 2)
     called = take_kernel(monkeypatch, simulation, threaded=True)
-    results += [steps_from(simulation, start, threads, 2) for threads in THREADS]
-    for x, v in results[1:]:
-        assert np.array_equal(x, results[0][0]) and np.array_equal(v, results[0][1])
+    for threads in THREADS:
+        threaded = steps_from(simulation, start, threads, 2)
+        assert np.array_equal(threaded.positions, serial.positions)
+        assert np.array_equal(threaded.velocities, serial.velocities)
     assert called == [simulation.integrator.parallel_kernel] * len(THREADS)
-    assert results[0][0][:, 1].min() >= -1.0 - 1e-12
+    assert serial.positions[:, 1].min() >= -1.0 - 1e-12
     assert (positions[:, 1] < -1.0).sum() > simulation.model.particle_count // 3
 
 
