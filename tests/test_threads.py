@@ -22,9 +22,10 @@ from springsim.errors import SimulationDiverged
 from springsim.forces import forces
 from springsim.integrators import available_threads
 from springsim.integrators._steps import DIVERGENCE_CHUNKS
+from springsim.model import build_model
 from springsim.reference import reference_forces
 from springsim.scenefile import load_scene
-from springsim.spring_runs import PARTITION, partition_count
+from springsim.spring_runs import PARTITION, TILE, partition_count
 
 THREADS = sorted({1, min(2, available_threads()), available_threads()})
 
@@ -104,6 +105,19 @@ def test_partitioned_spring_forces_match_the_reference(name):
     x, v = simulation.state.positions, simulation.state.velocities
     expected = reference_forces(simulation.model, x, v)
     assert np.allclose(forces(simulation.model.arrays, x, v), expected, rtol=0, atol=1e-9)
+
+
+def test_partitions_of_several_tiles_give_the_reference_forces():
+    """A partition longer than a tile (spring_runs.TILE) walks its tiles in turn: a 17^3 cube
+    in two partitions of over 2,400 particles."""
+    model = build_model(load_scene("jelly-plane", ["bodies.0.particles_per_edge=17"]),
+                        spring_partition=TILE + 52)
+    assert partition_count(model.particle_count, model.arrays.spring_partition) == 2
+    rng = np.random.default_rng(5)
+    x = model.initial_positions + 0.02 * rng.standard_normal(model.initial_positions.shape)
+    v = rng.standard_normal(x.shape)
+    expected = reference_forces(model, x, v)
+    assert np.allclose(forces(model.arrays, x, v), expected, rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize("name", MODELS)
