@@ -12,10 +12,10 @@ from .attachments import hold_attachments, pack_attachments
 from .bodies.balls import collision_parameters
 from .clock import SLOTS as CLOCK_SLOTS
 from .collision.shapes.surfaces import surface_contact_arrays
-from .spring_runs import build_spring_runs
-from .terms import TERMS
+from .spring_runs import PARTITION, build_spring_runs, checked_partition
 from .springs import SpringKind
 from .surfaces import Embedding
+from .terms import TERMS
 from .terrains import pack_terrains
 from .wind import pack_wind, quads_both_ways
 from .world_tables import pack_world
@@ -36,6 +36,8 @@ class ModelArrays(NamedTuple):
     spring_runs: np.ndarray      # (R, 5) int64 first, offset, count, start, group (spring_runs.py)
     run_rest_length: np.ndarray  # (E,) m, the runs' rest lengths; negative at a hole
     loose_springs: np.ndarray    # (L,) uint32 numbers of the springs in no run
+    spring_partition: int        # particles per partition of the force loop, at least
+                                 # (spring_runs.py): PARTITION unless a Simulation asks
     terrain_kind: np.ndarray     # (T,) int64, the kind number (terrains/base.py)
     terrain_parameters: np.ndarray  # (T, K) each terrain's parameters, as its kind packs them
     terrain_data: np.ndarray     # (D,) the data the terrains share (a mesh's distance grid)
@@ -151,8 +153,9 @@ class Model:
         return int(np.count_nonzero(self.spring_kind == kind))
 
 
-def build_model(scene) -> Model:
-    """Assemble every body of ``scene`` into one set of particle and spring arrays."""
+def build_model(scene, spring_partition: int = PARTITION) -> Model:
+    """Assemble every body of ``scene`` into one set of particle and spring arrays, whose force
+    loop runs in partitions of ``spring_partition`` particles (spring_runs.py)."""
     built = [body.build() for body in scene.bodies]
     offsets = np.cumsum([0] + [len(b.masses) for b in built])
     positions = np.concatenate([b.positions for b in built])
@@ -202,6 +205,7 @@ def build_model(scene) -> Model:
         spring_group=groups,
         group_ks=np.asarray(group_ks, float), group_kd=np.asarray(group_kd, float),
         **build_spring_runs(springs, groups, rest_length),
+        spring_partition=checked_partition(spring_partition),
         **pack_terrains(scene.terrains, float(terrain_offset.max(initial=0.0))),
         **pack_world(scene.terrains, built, offsets),
         clock=np.zeros(CLOCK_SLOTS), **pack_wind(scene.wind),

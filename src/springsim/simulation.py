@@ -17,6 +17,7 @@ from .errors import SceneError, SimulationDiverged, require
 from .integrators import available_threads, get_integrator
 from .model import build_model
 from .scene import Scene, check_bodies_outside_terrains
+from .spring_runs import PARTITION
 from .state import State
 from .substeps import ColliderSubsteps, collider_substeps
 from .surfaces import body_surface
@@ -54,11 +55,14 @@ class Simulation:
     scene's ``implicit`` settings (for example ``newton_iterations=2`` for implicit_euler).
     The simulation works on its own copy of ``scene`` (``self.scene``): the caller's is never
     changed. ``threads`` is the most threads a step may use (default: all cores); results are
-    the same for any number.
+    the same for any number. ``spring_partition`` is the particles per partition of the force
+    loop, at least (spring_runs.py: 65,536 unless given), which fixes the order of its sums:
+    the tests and benchmarks set a small one to cut a small model into several.
     """
 
     def __init__(self, scene, integrator: str | None = None, dt: float | None = None,
-                 threads: int | None = None, **integrator_options):
+                 threads: int | None = None, spring_partition: int = PARTITION,
+                 **integrator_options):
         if isinstance(scene, (str, bytes)) or hasattr(scene, "__fspath__"):
             raise SceneError("scene", str(scene), "is a name or a file, not a Scene: load it "
                              f"first, Simulation(springsim.load_scene({str(scene)!r}))")
@@ -77,7 +81,7 @@ class Simulation:
         self.dt = float(scene.dt)
         self._substeps = {}               # dt -> ColliderSubsteps
         self.substeps()                   # a motion too fast for any substeps fails here,
-        self.model = build_model(scene)   # before anything is built
+        self.model = build_model(scene, spring_partition)   # before anything is built
         check_bodies_outside_terrains(self.model)
         self._integrator_options = integrator_settings(scene, integrator_options)
         self.integrator = get_integrator(scene.integrator, **self._integrator_options)

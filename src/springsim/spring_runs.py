@@ -13,14 +13,18 @@ gives no force. Springs that fit in no run stay in a plain list (``loose_springs
 The kernels work on *columns*: positions, velocities and forces as nine rows of length P
 (x, y, z, vx, vy, vz, fx, fy, fz), the layout SIMD loads want, plus three rows of scratch.
 
-Threads: the particles are cut into ``partition_count`` fixed partitions (one for fewer than
-2 PARTITION particles), each owning its rows of the columns. A partition adds the forces of the
+Threads: the particles are cut into ``partition_count`` fixed partitions of at least the
+model's ``spring_partition`` particles (ModelArrays; PARTITION unless a Simulation asks for
+another: one partition for fewer than twice that), each owning its rows of the columns. The
+partitions, not the threads, fix the order of every sum; a small partition makes a small model
+take the same paths as a large one (tests/test_threads.py). A partition adds the forces of the
 springs whose first end it owns to both ends, except the second ends that lie in a later
 partition; then each partition adds those springs' forces to its own second ends, computing
 them again. No row is written by two partitions and every row sums its terms in the same order
 whatever the number of threads, so results are bit-identical for any count. The springs
-computed twice are those within the largest offset of a partition's start (N^2 + N + 1 in a
-cube of N per edge): on the 100^3 cube about 10% of them.
+computed twice are those within the largest offset of a partition's start (2 N^2 in a cube of
+N per edge, its bend springs): on the 100^3 cube about 10% of them. A partition smaller than the
+largest offset is still exact: a spring's second end may lie any number of partitions later.
 """
 from typing import NamedTuple
 
@@ -28,13 +32,16 @@ import numpy as np
 from numba import prange
 
 from ._jit import inline_kernel, kernel
+from .errors import require
 from .springs import spring_force_factor
 
 MAX_GAP = 32        # a longer gap between neighbours of one family starts a new run
 MIN_RUN = 8         # shorter runs cost more in loop overhead than they save: loose springs
 TILE = 2048         # particles per tile: all runs cross one tile while its columns are in cache
 COLUMNS = 12        # rows of ``columns``: x, y, z, vx, vy, vz, fx, fy, fz, 3 rows of scratch
-PARTITION = 65536   # particles per partition of the force loop, at least (module doc)
+PARTITION = 65536   # particles per partition of the force loop, at least, unless the model's
+                    # spring_partition says otherwise (module doc)
+LARGEST_PARTITION = 2 ** 62   # any larger is one partition whatever the model; an int64 holds it
 
 
 def build_spring_runs(springs: np.ndarray, group: np.ndarray, rest_length: np.ndarray) -> dict:
@@ -96,10 +103,20 @@ def run_layout(a: np.ndarray, b: np.ndarray) -> RunLayout:
                      runs["loose_springs"].astype(np.int64))
 
 
+def checked_partition(partition) -> int:
+    """``partition`` as a model's ``spring_partition`` (module doc), refused in one line unless
+    it is a whole number of particles from 1 to 2^62."""
+    require(isinstance(partition, (int, np.integer)) and not isinstance(partition, bool)
+            and 1 <= partition <= LARGEST_PARTITION, "spring_partition", partition,
+            f"must be a whole number of particles from 1 to 2^62 (default {PARTITION})")
+    return int(partition)
+
+
 @kernel
-def partition_count(particles):
-    """The number of partitions of the force loop (module doc): fixed by the particle count."""
-    return max(1, particles // PARTITION)
+def partition_count(particles, partition=PARTITION):
+    """The number of partitions of the force loop (module doc): fixed by the particle count and
+    the model's ``spring_partition`` (PARTITION unless given)."""
+    return max(1, particles // partition)
 
 
 @inline_kernel
@@ -128,7 +145,7 @@ def add_run_forces(model, columns):
     partition (module doc) and within one tile by tile."""
     runs, rest_length = model.spring_runs, model.run_rest_length
     particles = columns.shape[1]
-    partitions = partition_count(particles)
+    partitions = partition_count(particles, model.spring_partition)
     for k in prange(partitions):
         start, stop = k * particles // partitions, (k + 1) * particles // partitions
         for tile in range(start, stop, TILE):

@@ -53,7 +53,8 @@ def variant_calls(integrator: str, variants=None) -> dict:
 
 def warmup_scenes() -> list:
     """Small models of a jelly cube on the plane and a cloth on balls: between them, every
-    kind of body, terrain and contact the step kernels are compiled for."""
+    kind of body, terrain and contact the step kernels are compiled for (the types of
+    tests/test_threads.py's small models, which step on the threaded kernels)."""
     from .scenefile import load_scene
 
     return [load_scene("jelly-plane", ["bodies.0.particles_per_edge=3"]),
