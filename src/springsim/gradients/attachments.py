@@ -241,21 +241,10 @@ class SoftAttachmentsAdjoint(AdjointTerm):
     def acts(cls, physical) -> bool:
         return bool(soft(physical).any())
 
-    @classmethod
-    def forces(cls, physical, x, v):
-        return attachment_forces(physical, x, v)
-
-    @classmethod
-    def forces_vjp(cls, physical, x, v, g, x_bar, v_bar, bar) -> None:
-        attachment_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
-
-    @classmethod
-    def first_iteration_rhs(cls, physical, v, h):
-        return first_iteration_rhs(physical, v, h)
-
-    @classmethod
-    def first_iteration_rhs_vjp(cls, physical, v, h, g, v_bar, bar) -> None:
-        first_iteration_rhs_vjp(physical, v, h, g, v_bar, bar)
+    # the functions above, whose arguments are the protocol's (terms/adjoint.py)
+    forces, forces_vjp = staticmethod(attachment_forces), staticmethod(attachment_forces_vjp)
+    first_iteration_rhs = staticmethod(first_iteration_rhs)
+    first_iteration_rhs_vjp = staticmethod(first_iteration_rhs_vjp)
 
     @classmethod
     def diagonal_blocks(cls, physical, x, v, h):

@@ -74,25 +74,30 @@ class Physical(NamedTuple):
         arrays = model.arrays
         group = arrays.spring_group
         clock = np.zeros(2)   # the moving terrains' shapes read it (contact.Planes)
-        return cls(arrays.group_ks[group].astype(float), arrays.group_kd[group].astype(float),
-                   arrays.rest_length.astype(float), model.mass.astype(float),
-                   arrays.drag.astype(float), arrays.gravity.astype(float),
-                   arrays.inv_mass > 0.0, arrays.springs[:, 0].astype(np.int64),
-                   arrays.springs[:, 1].astype(np.int64),
-                   arrays.terrain_friction.astype(float),
-                   arrays.terrain_restitution.astype(float), Planes.of(model, clock),
-                   arrays.wind_settings.astype(float), arrays.wind_keys.astype(float),
-                   arrays.wind_modes.astype(float),
-                   arrays.wind_triangles.astype(np.int64).reshape(-1, 3),
-                   arrays.wind_weights.astype(float), clock,
-                   arrays.pin_particles.astype(np.int64), arrays.pin_motion.astype(np.int64),
-                   arrays.pin_placed.astype(float), arrays.pin_stiffness.astype(float),
-                   arrays.pin_damping.astype(float), arrays.motion_info, arrays.motion_keys,
-                   arrays.attachment_nodes.astype(np.int64),
-                   arrays.attachment_weights.astype(float),
-                   arrays.attachment_stiffness.astype(float),
-                   arrays.attachment_damping.astype(float), Bodies.of(arrays),
-                   arrays.term_tables)
+        return cls(
+            ks=arrays.group_ks[group].astype(float), kd=arrays.group_kd[group].astype(float),
+            rest=arrays.rest_length.astype(float), mass=model.mass.astype(float),
+            drag=arrays.drag.astype(float), gravity=arrays.gravity.astype(float),
+            free=arrays.inv_mass > 0.0, a=arrays.springs[:, 0].astype(np.int64),
+            b=arrays.springs[:, 1].astype(np.int64),
+            friction=arrays.terrain_friction.astype(float),
+            restitution=arrays.terrain_restitution.astype(float),
+            planes=Planes.of(model, clock),
+            wind_settings=arrays.wind_settings.astype(float),
+            wind_keys=arrays.wind_keys.astype(float), wind_modes=arrays.wind_modes.astype(float),
+            wind_triangles=arrays.wind_triangles.astype(np.int64).reshape(-1, 3),
+            wind_weights=arrays.wind_weights.astype(float), clock=clock,
+            pin_particles=arrays.pin_particles.astype(np.int64),
+            pin_motion=arrays.pin_motion.astype(np.int64),
+            pin_placed=arrays.pin_placed.astype(float),
+            pin_stiffness=arrays.pin_stiffness.astype(float),
+            pin_damping=arrays.pin_damping.astype(float), motion_info=arrays.motion_info,
+            motion_keys=arrays.motion_keys,
+            attachment_nodes=arrays.attachment_nodes.astype(np.int64),
+            attachment_weights=arrays.attachment_weights.astype(float),
+            attachment_stiffness=arrays.attachment_stiffness.astype(float),
+            attachment_damping=arrays.attachment_damping.astype(float),
+            bodies=Bodies.of(arrays), term_tables=arrays.term_tables)
 
     def differentiable(self, name: str) -> np.ndarray:
         """The numbers Cotangents.``name`` is the cotangent of: a field, or one of the contact

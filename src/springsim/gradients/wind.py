@@ -388,19 +388,8 @@ class WindAdjoint(AdjointTerm):
     def acts(cls, physical) -> bool:
         return blows(physical)
 
-    @classmethod
-    def forces(cls, physical, x, v):
-        return wind_forces(physical, x, v)
-
-    @classmethod
-    def forces_vjp(cls, physical, x, v, g, x_bar, v_bar, bar) -> None:
-        wind_forces_vjp(physical, x, v, g, x_bar, v_bar, bar)
-
-    @classmethod
-    def diagonal_blocks(cls, physical, x, v, h):
-        return wind_blocks(physical, x, v, h)
-
-    @classmethod
-    def diagonal_blocks_vjp(cls, physical, x, v, h, weights, x_bar, v_bar, bar) -> None:
-        wind_blocks_vjp(physical, x, v, h, weights, x_bar, v_bar, bar)
+    # the functions above, whose arguments are the protocol's (terms/adjoint.py)
+    forces, forces_vjp = staticmethod(wind_forces), staticmethod(wind_forces_vjp)
+    diagonal_blocks = staticmethod(wind_blocks)
+    diagonal_blocks_vjp = staticmethod(wind_blocks_vjp)
 
