@@ -23,7 +23,7 @@ class TerrainMesh:
 
     vertices: np.ndarray
     triangles: np.ndarray
-    checker: np.ndarray | None = None       # (T,) 0 or 1: a checker's cells, or one colour for all
+    checker: np.ndarray | None = None       # (T,) 0 or 1: which checker colour (render.colors)
     color: str = "terrain"                  # "terrain" or "bowl" (render.colors)
     cull_back: bool = False                 # hide faces seen from behind (a bowl's near wall)
     two_sided: bool = False                 # both sides lit alike (an open mesh)
