@@ -66,7 +66,7 @@ from .implicit_bodies import (contact_bars, friction_vjp, linearization_vjp, pen
 from .pins import place, release
 from .clock import STEP_START
 from .implicit_lookup import look_up, refuse_turning, swept, swept_vjp, unseen
-from .terrain_shapes import Flat
+from ..terrains.plane import Flat
 from . import terms
 
 # how each contact's floor came about (constraints.lowest_normal_velocity)

@@ -163,20 +163,6 @@ def add_system_springs_vjp(a, b, ks, kd, rest, x, u, g, h, stiffness_scale, damp
         rest_bar[s] -= stiffness_scale * across_dr * sideways
 
 
-# The far test of RK4's adjoint (contact.reach) runs at every step on states the kernels have
-# just pushed out of the cache: as NumPy expressions it cost a tenth of the whole adjoint.
-
-@kernel
-def least_height(x, normal, offset, free):
-    """The least n . x - offset of a free particle (inf where none is free)."""
-    least = math.inf
-    for i in range(x.shape[0]):
-        if free[i]:
-            height = x[i, 0] * normal[0] + x[i, 1] * normal[1] + x[i, 2] * normal[2] - offset[i]
-            least = min(least, height)
-    return least
-
-
 @kernel
 def largest_component(v):
     """The largest |v_ic| (sqrt(3) times it bounds the fastest speed)."""

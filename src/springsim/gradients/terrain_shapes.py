@@ -21,7 +21,6 @@ from typing import NamedTuple
 import numpy as np
 
 from ..motion import POSE, pose_into
-from ..terrains.plane import Flat  # noqa: F401  (backward Euler's adjoint names it from here)
 from .clock import FORCE_TIME
 
 STRAIGHT_UP = np.array([0.0, 1.0, 0.0])   # the normal the kernels give a point they cannot place
