@@ -148,7 +148,7 @@ def test_warmup_lists_every_variant_of_each_method():
 
 @pytest.mark.slow   # explicit Euler's threaded step: minutes to compile where it is not cached
 def test_warmup_compiles_the_threaded_variant_so_a_threaded_step_compiles_nothing(capsys):
-    """After `springsim warmup --variants threaded` (test.sh runs it first for the slow tier:
+    """After `springsim warmup --variants threaded` (test.sh runs it first, for the thread tests:
     then this loads the cache), the threaded variant is compiled, and a threaded step announces
     nothing."""
     from springsim.scenefile import load_scene

@@ -30,7 +30,8 @@ def kernels_of(simulation) -> str:
     from .spring_runs import partition_count
 
     threaded = (getattr(simulation.integrator, "parallel_kernel", None) is not None
-                and partition_count(simulation.model.particle_count) > 1)
+                and partition_count(simulation.model.particle_count,
+                                    simulation.model.arrays.spring_partition) > 1)
     return f"the {simulation.integrator.name} kernels" + (" (threaded)" if threaded else "")
 
 

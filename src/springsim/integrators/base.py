@@ -69,8 +69,9 @@ class KernelIntegrator(Integrator):
     the state's surface pair list, returned as the last step left it), and the same compiled
     with its loops on threads, ``parallel_kernel``.
 
-    Which one runs depends on the model's size alone (spring_runs.partition_count): a model
-    whose force loop has one partition (under 131,072 particles) runs serially, since starting
+    Which one runs depends on the model's size and its ``spring_partition``
+    (spring_runs.partition_count): a model whose force loop has one partition (under 131,072
+    particles, by default) runs serially, since starting
     threads for every loop costs more than it saves there; a larger one runs the threaded kernel
     with ``threads`` threads, one thread included, so that its results do not depend on the
     number of threads (spring_runs.py: bit-identical for any count)."""
@@ -87,7 +88,8 @@ class KernelIntegrator(Integrator):
     def keeps_stages(self, model) -> bool:
         """Whether ``advance_keeping`` takes this model's steps as ``advance`` does: a method
         with a keeping kernel, on a model that runs the serial kernel."""
-        return self.keeping_kernel is not None and partition_count(model.particle_count) == 1
+        partitions = partition_count(model.particle_count, model.arrays.spring_partition)
+        return self.keeping_kernel is not None and partitions == 1
 
     def advance_keeping(self, model, state, dt, kept, starts):
         """``advance`` (where ``keeps_stages``) of len(kept) steps, keeping each one's start
@@ -101,7 +103,8 @@ class KernelIntegrator(Integrator):
         """The call ``advance`` makes: ``parallel_kernel`` where ``threaded`` (by default, where
         the model's size asks for it), else ``kernel``."""
         if threaded is None:
-            threaded = partition_count(model.particle_count) > 1
+            threaded = partition_count(model.particle_count,
+                                       model.arrays.spring_partition) > 1
         return KernelCall(self.parallel_kernel if threaded else self.kernel,
                           (model.arrays, state.positions, state.velocities, float(dt),
                            int(steps), state.pairs))
