@@ -143,7 +143,10 @@ def from_columns(columns, force):
 def add_run_forces(model, columns):
     """Add the force of every spring in a run to the force rows of the columns, partition by
     partition (module doc) and within one tile by tile."""
+    # as locals: a threaded loop takes what it reads as arguments, and the model's nested
+    # tables (term_tables) cannot be one
     runs, rest_length = model.spring_runs, model.run_rest_length
+    group_ks, group_kd = model.group_ks, model.group_kd
     particles = columns.shape[1]
     partitions = partition_count(particles, model.spring_partition)
     for k in prange(partitions):
@@ -158,7 +161,7 @@ def add_run_forces(model, columns):
                     entries = rest_length[runs[r, 3] + low - first:runs[r, 3] + high - first]
                     group = runs[r, 4]
                     add_stretch_forces(columns, low, low + offset, high - low, entries,
-                                       model.group_ks[group], model.group_kd[group], stop)
+                                       group_ks[group], group_kd[group], stop)
     for k in prange(1, partitions):
         start, stop = k * particles // partitions, (k + 1) * particles // partitions
         for r in range(runs.shape[0]):
@@ -169,7 +172,7 @@ def add_run_forces(model, columns):
                 entries = rest_length[runs[r, 3] + low - first:runs[r, 3] + high - first]
                 group = runs[r, 4]
                 add_crossing_forces(columns, low, low + offset, high - low, entries,
-                                    model.group_ks[group], model.group_kd[group])
+                                    group_ks[group], group_kd[group])
 
 
 @inline_kernel

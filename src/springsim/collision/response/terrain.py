@@ -72,19 +72,25 @@ def apply_contact_forces(model, x, v, h, a):
     if blocks:
         apply_contact_forces_in_blocks(model, x, v, h, a)
         return
+    # the model's arrays the particle loop reads, as locals: a threaded kernel's loop takes
+    # what it reads as arguments, and the model's nested tables (term_tables) cannot be one
+    inv_mass, terrain_offset = model.inv_mass, model.terrain_offset
+    terrain_kind, terrain_parameters = model.terrain_kind, model.terrain_parameters
+    terrain_data, terrain_motion = model.terrain_data, model.terrain_motion
+    terrain_deforming = model.terrain_deforming
     for i in prange(x.shape[0]):
-        if model.inv_mass[i] == 0.0:
+        if inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
             # a still terrain looked up with the model's own arrays (STILL_LOOKUP)
-            still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
+            still = terrain_motion[t] < 0 and terrain_deforming[t] < 0
             if still:
                 phi, nx, ny, nz = still_terrain_distance(
-                    model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
-                    x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+                    terrain_kind[t], terrain_parameters[t], terrain_data,
+                    x[i, 0], x[i, 1], x[i, 2], terrain_offset[i])
             else:
                 phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
-                                             model.terrain_offset[i])
+                                             terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             a_n = a[i, 0] * nx + a[i, 1] * ny + a[i, 2] * nz
@@ -187,18 +193,24 @@ def resolve_terrain_impacts(model, x, v):
     terrains = terrain_view(model)
     g = model.gravity
     g_size = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+    # the model's arrays the particle loop reads, as locals: a threaded kernel's loop takes
+    # what it reads as arguments, and the model's nested tables (term_tables) cannot be one
+    inv_mass, terrain_offset = model.inv_mass, model.terrain_offset
+    terrain_kind, terrain_parameters = model.terrain_kind, model.terrain_parameters
+    terrain_data, terrain_motion = model.terrain_data, model.terrain_motion
+    terrain_deforming = model.terrain_deforming
     for i in prange(x.shape[0]):
-        if model.inv_mass[i] == 0.0:
+        if inv_mass[i] == 0.0:
             continue
         for t in range(epsilon.shape[0]):
-            still = model.terrain_motion[t] < 0 and model.terrain_deforming[t] < 0
+            still = terrain_motion[t] < 0 and terrain_deforming[t] < 0
             if still:   # STILL_LOOKUP
                 phi, nx, ny, nz = still_terrain_distance(
-                    model.terrain_kind[t], model.terrain_parameters[t], model.terrain_data,
-                    x[i, 0], x[i, 1], x[i, 2], model.terrain_offset[i])
+                    terrain_kind[t], terrain_parameters[t], terrain_data,
+                    x[i, 0], x[i, 1], x[i, 2], terrain_offset[i])
             else:
                 phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2],
-                                             model.terrain_offset[i])
+                                             terrain_offset[i])
             if phi >= epsilon[t]:
                 continue
             u0 = u1 = u2 = 0.0
