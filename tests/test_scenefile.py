@@ -61,13 +61,22 @@ epsilon = 0.01
 """
 
 
+def assert_same_values(a, b, name):
+    """Arrays equal, and the terms' tables (tuples of named tuples of arrays) field by field."""
+    if isinstance(a, tuple):
+        assert isinstance(b, tuple) and len(a) == len(b), name
+        for part, (first, second) in enumerate(zip(a, b)):
+            assert_same_values(first, second, f"{name}[{part}]")
+        return
+    np.testing.assert_array_equal(a, b, err_msg=name)
+
+
 def assert_same_model(scene_a, scene_b):
     for name in ("name", "integrator", "dt", "duration"):
         assert getattr(scene_a, name) == getattr(scene_b, name), name
     a, b = build_model(scene_a), build_model(scene_b)
     for name in a.arrays._fields:
-        np.testing.assert_array_equal(getattr(a.arrays, name), getattr(b.arrays, name),
-                                      err_msg=name)
+        assert_same_values(getattr(a.arrays, name), getattr(b.arrays, name), name)
     for name in ("mass", "pinned", "spring_kind", "initial_positions", "initial_velocities"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
 

@@ -34,8 +34,9 @@ import numpy as np
 
 from ..terrains.deforming_mesh import REACH
 from .clock import at_time
+from ..terrains.plane import Flat
 from .kernels import largest_component
-from .terrain_shapes import Deforming, Flat, Moving, surface_velocity
+from .terrain_shapes import Deforming, Moving, surface_velocity
 
 
 class Planes(NamedTuple):
