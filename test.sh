@@ -32,9 +32,9 @@ if [[ "$tiers" == *external* ]]; then
 fi
 # the kernels the tests call, compiled once before them (later: loaded from the cache in
 # seconds), so that no test's output holds the first-compile notice: every integrator's serial
-# step and gradient tape, and explicit Euler's threaded step (test_threads.py, default tier; the
-# other threaded steps, minutes each, no test calls)
-threaded=explicit_euler
+# step and gradient tape, and the threaded steps of explicit Euler (test_threads.py, default tier)
+# and vertex block descent (test_vbd.py; the other threaded steps, minutes each, no test calls)
+threaded="explicit_euler vbd"
 if ! .venv/bin/python -c "import sys; from springsim.warmup import is_warm; \
 from springsim.integrators import integrator_names; \
 sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_names()) \
@@ -42,7 +42,7 @@ sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_na
     setup_stage compiling "compiling the kernels the tests call (springsim warmup; first run only)" \
         .venv/bin/springsim warmup --variants serial keeping
     [ -z "$threaded" ] || setup_stage compiling \
-        "compiling explicit Euler's threaded step for the thread tests (first run only)" \
+        "compiling the threaded steps of $threaded for the thread tests (first run only)" \
         .venv/bin/springsim warmup --integrators $threaded --variants threaded
 fi
 exec .venv/bin/python -m pytest ${workers[@]+"${workers[@]}"} "$@"

@@ -317,9 +317,10 @@ def test_cube_resting_on_the_plane_stays_at_rest():
     assert np.abs(simulation.positions.mean(axis=0) - start)[[0, 2]].max() < 1e-9
 
 
-def sliding_cube(degrees, friction):
+def sliding_cube(degrees, friction, integrator="implicit_euler", dt=H, **options):
     """The course's springs, 4 per edge, turned about z so that a face lies on a plane through
-    the origin sloping ``degrees`` down towards +x, 1 mm above it, at rest."""
+    the origin sloping ``degrees`` down towards +x, 1 mm above it, at rest (``options``: the
+    integrator's)."""
     springs = SpringParameters(2000.0, 60.0)
     angle = np.radians(degrees)
     normal = np.array([np.sin(angle), np.cos(angle), 0.0])
@@ -328,7 +329,7 @@ def sliding_cube(degrees, friction):
                 structural=springs, shear=springs, bend=springs)
     slope = Plane(point=(0.0, 0.0, 0.0), normal=tuple(normal), friction=friction)
     scene = Scene(name="slide", bodies=[cube], terrains=[slope], gravity=EARTH_GRAVITY)
-    simulation = Simulation(scene, integrator="implicit_euler", dt=H)
+    simulation = Simulation(scene, integrator=integrator, dt=dt, **options)
     phi = simulation.positions @ normal
     simulation.state.positions += (0.001 - phi.min()) * normal
     return simulation, np.array([np.cos(angle), -np.sin(angle), 0.0])

@@ -29,6 +29,15 @@ class ImplicitSettings:
 
 
 @dataclass
+class VbdSettings:
+    """Settings of vertex block descent (integrators/vbd.py); the other integrators ignore them."""
+
+    iterations: int = 10                    # sweeps over the particles a step
+    contact_stiffness_ratio: float = 1000.0  # terrain contact stiffness over a particle's m/h^2
+    friction_velocity: float = 0.001        # m/s: sliding slower than this is held (static)
+
+
+@dataclass
 class Scene:
     name: str = "custom"
     # tables each with a ``type`` (scene_values.TYPED_LISTS)
@@ -40,6 +49,7 @@ class Scene:
     gravity: tuple = (0.0, -9.8, 0.0)     # m/s^2
     drag: float = 0.0                     # viscous drag coefficient, N s/m (f = -drag v)
     implicit: ImplicitSettings = field(default_factory=ImplicitSettings)
+    vbd: VbdSettings = field(default_factory=VbdSettings)
     wind: Wind | None = None              # moving air (wind.py); unset: still air, no force
     # particles of one body bound to another's surface (attachments.py)
     attachments: list[Attachment] = field(default_factory=list)
@@ -77,15 +87,22 @@ class Scene:
                 body.validate_thickness(f"bodies.{i}")
 
     def validate_implicit_settings(self) -> None:
-        """``[implicit]`` is checked whatever the integrator (a scene may switch to one that
-        uses it): each integrator that takes these settings checks them as it would use them."""
+        """``[implicit]`` and ``[vbd]`` are checked whatever the integrator (a scene may switch
+        to one that uses them): each integrator checks its section (its ``SECTION``) as it would
+        use it."""
         from .integrators import REGISTRY
 
         for integrator in REGISTRY.values():
-            accepted = [name for name in getattr(integrator, "OPTIONS", ())
-                        if hasattr(self.implicit, name)]
-            if accepted:
-                integrator(**{name: getattr(self.implicit, name) for name in accepted})
+            if getattr(integrator, "OPTIONS", ()):
+                integrator(**section_settings(self, integrator))
+
+
+def section_settings(scene, integrator) -> dict:
+    """The scene's settings for ``integrator`` (a registered class): those of its OPTIONS that
+    its ``SECTION`` of the scene has."""
+    section = getattr(scene, getattr(integrator, "SECTION", "implicit"))
+    return {name: getattr(section, name) for name in getattr(integrator, "OPTIONS", ())
+            if hasattr(section, name)}
 
 
 def check_bodies_outside_terrains(model) -> None:

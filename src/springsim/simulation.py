@@ -16,7 +16,7 @@ from .energy import energies
 from .errors import SceneError, SimulationDiverged, require
 from .integrators import available_threads, get_integrator
 from .model import build_model
-from .scene import Scene, check_bodies_outside_terrains
+from .scene import Scene, check_bodies_outside_terrains, section_settings
 from .spring_runs import PARTITION
 from .state import State
 from .substeps import ColliderSubsteps, collider_substeps
@@ -31,9 +31,8 @@ def integrator_settings(scene, overrides: dict) -> dict:
     """The scene's settings for its integrator (those it declares in OPTIONS), then overrides."""
     from .integrators import REGISTRY
 
-    accepted = getattr(REGISTRY.get(scene.integrator), "OPTIONS", ())
-    settings = {name: getattr(scene.implicit, name) for name in accepted
-                if hasattr(scene.implicit, name)}
+    integrator = REGISTRY.get(scene.integrator)
+    settings = section_settings(scene, integrator) if integrator is not None else {}
     return {**settings, **overrides}
 
 

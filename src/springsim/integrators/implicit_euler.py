@@ -409,6 +409,7 @@ class ImplicitEuler(Integrator):
     name = "implicit_euler"
     order = 1
     summary = "backward Euler, one linearized solve per step (Baraff-Witkin): large stable steps"
+    SECTION = "implicit"   # the scene's table of its options
     OPTIONS = ("newton_iterations", "cg_tolerance", "cg_max_iterations", "preconditioner")
     PRECONDITIONERS = ("two_level", "block_jacobi")
 

@@ -1,0 +1,305 @@
+"""Vertex block descent (Chen, Macklin, et al., SIGGRAPH 2024): backward Euler's step found by
+minimizing its incremental potential one particle at a time, at a fixed cost a step.
+
+Backward Euler's new positions minimize E(x) (vbd/vertex.py: inertia, springs with their
+dampers, drag, terrain contact with friction, and every term's force). Each iteration visits the
+particles colour by colour (vbd/graph.py: no spring joins two particles of a colour); each
+particle takes one Newton step on its own 3 x 3 block, f = -dE/dx_i, H = d2E/dx_i2 at the others'
+latest positions, x_i += H^-1 f. A step is ``iterations`` such sweeps (a setting), whatever
+touches what: no linear solve, no active set. Converged, the step is backward Euler's, nonlinear
+in full (implicit_euler linearizes it); with few iterations it is a stable approximation of it
+that loses energy, as backward Euler does.
+
+The first guess is VBD's adaptive one: x0 + h v0 + h^2 a, with a the last step's acceleration
+along gravity, kept to between zero and gravity itself (state.ContactMemory's velocity change).
+The terms (terms/) are linearized once an iteration, at its start: their force and their
+diagonal blocks of backward Euler's matrix, divided by h and h^2, join each particle's block.
+The particles of a colour share nothing they write, so they run on threads in the threaded
+kernel with the same bits as on one.
+
+After the step comes the pass every integrator runs (_steps.drive): the moving pins on their
+paths, hard attachments held, impacts with restitution, body-body and self contact.
+"""
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numba import prange
+
+from .._jit import inline_kernel, kernel, parallel_kernel
+from ..clock import CALL_START
+from ..errors import SceneError, require
+from ..terms import add_external_jacobians, add_step_end_forces
+from ..terrains import still_terrain_distance
+from ..vbd.contact import OFFSET_OF_BAND, contact_pressure, contact_share
+from ..vbd.graph import VertexGraph, vertex_graph
+from ..vbd.vertex import added, solve_block, spring_share
+from ..world import aim_pins, move_world, step_end, surface_velocity, terrain_at, terrain_view
+from .base import Integrator, KernelCall, register
+from ._steps import drive, threaded, threaded_drive
+from .implicit_euler import ImplicitState
+
+
+class Settings(NamedTuple):
+    """The integrator's options (VertexBlockDescent)."""
+
+    iterations: int                  # sweeps over all particles a step
+    contact_stiffness_ratio: float   # terrain contact stiffness over a particle's m / h^2
+    friction_velocity: float         # m/s: sliding slower than this is held (static friction)
+
+
+class DiagonalSlots(NamedTuple):
+    diagonal_slot: np.ndarray   # (P,) int64: particle i's block is blocks[i]
+
+
+class TermLayout(NamedTuple):
+    """Where the terms' add_jacobian writes (terms/base.py), for blocks of (P + 1, 3, 3): each
+    particle's own block at its number, every block between two particles at P, which is never
+    read (the block step sees only its particle's own)."""
+
+    diagonal: DiagonalSlots
+    attachment_slots: np.ndarray   # (A, 4, 4) int64
+
+
+def term_layout(arrays) -> TermLayout:
+    count = arrays.inv_mass.shape[0]
+    nodes = arrays.attachment_nodes.astype(np.int64)
+    slots = np.full((len(nodes), 4, 4), count, np.int64)
+    for j in range(4):
+        slots[:, j, j] = nodes[:, j]
+    return TermLayout(DiagonalSlots(np.arange(count, dtype=np.int64)), slots)
+
+
+# --- the method ---------------------------------------------------------------------------------
+
+@inline_kernel
+def vbd_step(model, state, scratch, h, pairs):
+    """One step: the world and the moving pins at the step's end, the first guess, ``iterations``
+    sweeps colour by colour, then v = (x - x0) / h (module doc)."""
+    graph, settings, layout, x0, y, v_k, term_force, term_blocks = scratch
+    x, v, memory = state.x, state.v, state.memory
+    move_world(model, step_end(model, h))
+    aim_pins(model, x, v, h)
+    start_guess(model, x, v, memory.velocity_change, h, x0, y)
+    for _ in range(settings.iterations):
+        linearize_terms(model, layout, x, x0, h, v_k, term_force, term_blocks)
+        for colour in range(graph.colour_start.shape[0] - 1):
+            sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, memory, h)
+    end_velocities(x, x0, v, memory.velocity_change, h)
+    keep_friction(model, settings, x, memory, h)
+    return pairs
+
+
+@inline_kernel
+def start_guess(model, x, v, velocity_change, h, x0, y):
+    """x0 = x; y = x + h v + h^2 g, the inertial target; x = the first guess (module doc). A
+    pinned particle goes where its velocity takes it (aim_pins: its path's point) and stays."""
+    g = model.gravity
+    g0, g1, g2 = g[0], g[1], g[2]
+    gravity = (g0 * g0 + g1 * g1 + g2 * g2) ** 0.5
+    inv_mass = model.inv_mass   # locals: a threaded loop cannot take the model (_steps.py)
+    for i in prange(x.shape[0]):
+        along = 0.0
+        if gravity > 0.0:   # the last acceleration along gravity, between 0 and gravity
+            along = (velocity_change[i, 0] * g0 + velocity_change[i, 1] * g1
+                     + velocity_change[i, 2] * g2) / (h * gravity)
+            along = min(max(along, 0.0), gravity) / gravity
+        free = 1.0 if inv_mass[i] > 0.0 else 0.0
+        for c in range(3):
+            x0[i, c] = x[i, c]
+            y[i, c] = x[i, c] + h * v[i, c] + free * h * h * g[c]
+            x[i, c] = x[i, c] + h * v[i, c] + free * along * h * h * g[c]
+
+
+@kernel
+def linearize_terms(model, layout, x, x0, h, v_k, force, blocks):
+    """force = h F of every term at (x, (x - x0) / h), blocks = its share of backward Euler's
+    matrix M - h dF/dv - h^2 dF/dx on each particle's diagonal (module doc)."""
+    for i in range(x.shape[0]):
+        for c in range(3):
+            v_k[i, c] = (x[i, c] - x0[i, c]) / h
+            force[i, c] = 0.0
+    blocks[:] = 0.0
+    add_step_end_forces(model, x, v_k, np.full(1, h), force)
+    add_external_jacobians(model, layout, h, False, x, v_k, v_k, blocks, force)
+
+
+@inline_kernel
+def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, memory, h):
+    """One block step for each particle of ``colour`` (vbd/vertex.py), in parallel: they share
+    no spring. Friction is lagged from the last step (``memory``: vbd/contact.py). The model's
+    arrays are read as locals, which a threaded loop can take."""
+    inv_mass, drag, offset = model.inv_mass, model.drag, model.terrain_offset
+    band = model.terrain_epsilon
+    kind, parameters, data = model.terrain_kind, model.terrain_parameters, model.terrain_data
+    motion, deforming = model.terrain_motion, model.terrain_deforming
+    terrains = terrain_view(model)
+    start, other, rest_length, ks, kd = (graph.start, graph.other, graph.rest_length, graph.ks,
+                                        graph.kd)
+    particles = graph.particles
+    ratio, smoothing = settings.contact_stiffness_ratio, settings.friction_velocity * h
+    rubbed, pressed = memory.terrain, memory.friction_damping
+    for n in prange(graph.colour_start[colour], graph.colour_start[colour + 1]):
+        i = particles[n]
+        inertia = 1.0 / (inv_mass[i] * h * h)
+        damping = drag[i] / h
+        m0, m1, m2 = x[i, 0] - x0[i, 0], x[i, 1] - x0[i, 1], x[i, 2] - x0[i, 2]
+        diagonal, s, b = inertia + damping, 1.0 / (h * h), term_blocks[i]
+        block = (-inertia * (x[i, 0] - y[i, 0]) - damping * m0 + term_force[i, 0] / h,
+                 -inertia * (x[i, 1] - y[i, 1]) - damping * m1 + term_force[i, 1] / h,
+                 -inertia * (x[i, 2] - y[i, 2]) - damping * m2 + term_force[i, 2] / h,
+                 diagonal + s * b[0, 0], s * b[0, 1], s * b[0, 2], diagonal + s * b[1, 1],
+                 s * b[1, 2], diagonal + s * b[2, 2])
+        for k in range(start[i], start[i + 1]):
+            block = added(block, spring_share(x, x0, i, other[k], rest_length[k], ks[k], kd[k],
+                                              h))
+        for t in range(band.shape[0]):
+            still = motion[t] < 0 and deforming[t] < 0
+            if still:
+                phi, nx, ny, nz = still_terrain_distance(kind[t], parameters[t], data, x[i, 0],
+                                                         x[i, 1], x[i, 2], offset[i])
+            else:
+                phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], offset[i])
+            delta = OFFSET_OF_BAND * band[t]
+            rubbing = pressed[i] if rubbed[i] == t else 0.0
+            if phi >= delta and rubbing == 0.0:
+                continue
+            u0 = u1 = u2 = 0.0
+            if not still:
+                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
+            block = added(block, contact_share(phi, nx, ny, nz, ratio * inertia, delta, rubbing,
+                                               m0 - h * u0, m1 - h * u1, m2 - h * u2, smoothing))
+        d0, d1, d2 = solve_block(block)
+        x[i, 0] += d0
+        x[i, 1] += d1
+        x[i, 2] += d2
+
+
+@inline_kernel
+def keep_friction(model, settings, x, memory, h):
+    """For the next step's friction (vbd/contact.py): each particle's terrain pressed hardest at
+    x (memory.terrain, -1 for none) and mu lambda there (memory.friction_damping)."""
+    inv_mass, offset = model.inv_mass, model.terrain_offset
+    band, friction = model.terrain_epsilon, model.terrain_friction
+    terrains = terrain_view(model)
+    ratio = settings.contact_stiffness_ratio
+    rubbed, pressed = memory.terrain, memory.friction_damping
+    for i in prange(x.shape[0]):
+        rubbed[i], pressed[i] = -1, 0.0
+        if inv_mass[i] == 0.0:
+            continue
+        hardest = 0.0
+        for t in range(band.shape[0]):
+            phi, _, _, _ = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], offset[i])
+            pressure = contact_pressure(phi, ratio / (inv_mass[i] * h * h),
+                                        OFFSET_OF_BAND * band[t])
+            if pressure > hardest:
+                hardest, rubbed[i], pressed[i] = pressure, t, friction[t] * pressure
+    return
+
+
+@inline_kernel
+def end_velocities(x, x0, v, velocity_change, h):
+    """v = (x - x0) / h, the change kept for the next step's guess."""
+    for i in prange(x.shape[0]):
+        for c in range(3):
+            new = (x[i, c] - x0[i, c]) / h
+            velocity_change[i, c] = new - v[i, c]
+            v[i, c] = new
+
+
+# --- the driver ---------------------------------------------------------------------------------
+
+@kernel
+def vbd_scratch(graph, settings, layout, x):
+    """What vbd_step takes besides the state, as a plain tuple (a threaded kernel's array
+    analysis cannot take a NamedTuple apart: _steps.py)."""
+    return (graph, settings, layout, np.empty_like(x), np.empty_like(x), np.empty_like(x),
+            np.empty_like(x), np.zeros((x.shape[0] + 1, 3, 3)))
+
+
+threaded_vbd_step = threaded(vbd_step)
+
+
+@kernel
+def advance(model, graph, settings, layout, state, h, steps, pairs):
+    """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
+    done, first diverged particle or -1, the post-step pass's pair list: _steps.drive)."""
+    return drive(vbd_step, model, state, vbd_scratch(graph, settings, layout, state.x), h,
+                 steps, pairs)
+
+
+@parallel_kernel
+def parallel_advance(model, graph, settings, layout, state, h, steps, pairs):
+    """advance, each colour's particles on threads."""
+    return threaded_drive(threaded_vbd_step, model, state,
+                          vbd_scratch(graph, settings, layout, state.x), h, steps, pairs)
+
+
+THREADED_FROM = 2048   # free particles from which a model runs the threaded kernel
+
+
+@register
+class VertexBlockDescent(Integrator):
+    """Options (scene ``[vbd]``): ``iterations`` (sweeps a step, default 10),
+    ``contact_stiffness_ratio`` (terrain contact stiffness over a particle's m/h^2, default
+    1,000) and ``friction_velocity`` (m/s, default 0.001: slower sliding is held)."""
+
+    name = "vbd"
+    order = 1
+    summary = ("vertex block descent: backward Euler's step minimized particle by particle, "
+               "a fixed cost a step")
+    SECTION = "vbd"
+    OPTIONS = ("iterations", "contact_stiffness_ratio", "friction_velocity")
+
+    def __init__(self, iterations=10, contact_stiffness_ratio=1000.0, friction_velocity=1e-3,
+                 **others):
+        for key, value in others.items():
+            raise SceneError(f"integrator option {key}", value,
+                             f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
+        require(isinstance(iterations, (int, np.integer)) and not isinstance(iterations, bool)
+                and 1 <= iterations <= 10000, "vbd.iterations", iterations,
+                "must be a whole number from 1 to 10000")
+        require(_positive(contact_stiffness_ratio), "vbd.contact_stiffness_ratio",
+                contact_stiffness_ratio, "must be a number > 0 (times m/h^2)")
+        require(_positive(friction_velocity), "vbd.friction_velocity", friction_velocity,
+                "must be a speed > 0 m/s")
+        self.settings = Settings(int(iterations), float(contact_stiffness_ratio),
+                                 float(friction_velocity))
+
+    def tables(self, model) -> tuple:
+        """The model's graph and term layout, built on first use and kept with the model."""
+        kept = self.model_cache(model)
+        if "graph" not in kept:
+            kept["graph"] = vertex_graph(model.arrays)
+            kept["layout"] = term_layout(model.arrays)
+        return kept["graph"], kept["layout"]
+
+    def kernel_call(self, model, state, dt, steps, threaded=None) -> KernelCall:
+        graph, layout = self.tables(model)
+        if threaded is None:
+            threaded = graph.particles.shape[0] >= THREADED_FROM
+        return KernelCall(parallel_advance if threaded else advance, (
+            model.arrays, graph, self.settings, layout,
+            ImplicitState(state.positions, state.velocities, state.contacts), float(dt),
+            int(steps), state.pairs))
+
+    def advance(self, model, state, dt, steps, threads=1):
+        call = self.kernel_call(model, state, dt, steps)
+        if call.kernel is parallel_advance:
+            numba.set_num_threads(threads)
+        model.arrays.clock[CALL_START] = state.time   # the steps take their times from it
+        done, particle, state.pairs = call.kernel(*call.arguments)
+        return int(done), int(particle)
+
+    def variants(self, model, state, dt):
+        return {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
+                "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
+
+
+def _positive(value) -> bool:
+    return (isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+            and bool(np.isfinite(value)) and value > 0)
+
+
+__all__ = ["VertexBlockDescent", "VertexGraph"]

@@ -1,0 +1,72 @@
+"""Each particle's springs, and a colouring of the particles that no spring joins within a colour.
+
+Vertex block descent updates one particle at a time from its neighbours' latest positions. The
+particles of one colour share no spring, so each reads only particles of other colours, and a
+colour's particles can be updated in any order, on any number of threads, with the same bits:
+the colouring fixes the result, and it is computed once per model (``vertex_graph``), greedily in
+particle order, so that the same model always gets the same colours.
+
+A particle's springs are laid out contiguously (``start[i]:start[i + 1]``), each entry with what
+the block needs of the spring (the other end, rest length, ks, kd) beside it, so that a sweep reads
+them in order instead of through the spring tables.
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from .._jit import kernel
+
+
+class VertexGraph(NamedTuple):
+    """The springs of each particle, and the particles by colour (module doc)."""
+
+    start: np.ndarray            # (P + 1,) int64: particle i's entries are start[i]:start[i + 1]
+    other: np.ndarray            # (2S,) int64: the spring's other end
+    rest_length: np.ndarray      # (2S,) m
+    ks: np.ndarray               # (2S,) N/m
+    kd: np.ndarray               # (2S,) N s/m
+    colour_start: np.ndarray     # (C + 1,) int64: colour c is particles[colour_start[c]:...[c + 1]]
+    particles: np.ndarray        # (F,) int64: the free particles (inverse mass > 0), by colour
+
+
+def vertex_graph(arrays) -> VertexGraph:
+    """The graph of a model's ModelArrays (module doc)."""
+    count = arrays.inv_mass.shape[0]
+    springs = arrays.springs.astype(np.int64)
+    ends = np.concatenate([springs[:, 0], springs[:, 1]])
+    others = np.concatenate([springs[:, 1], springs[:, 0]])
+    number = np.concatenate([np.arange(len(springs))] * 2)
+    order = np.argsort(ends, kind="stable")   # by particle, each one's springs in spring order
+    start = np.searchsorted(ends[order], np.arange(count + 1)).astype(np.int64)
+    number = number[order]
+    group = arrays.spring_group[number]
+    other = np.ascontiguousarray(others[order])
+    colour = greedy_colours(start, other, count)
+    free = np.flatnonzero(arrays.inv_mass > 0.0)
+    by_colour = free[np.argsort(colour[free], kind="stable")]
+    colour_start = np.searchsorted(colour[by_colour], np.arange(colour.max(initial=-1) + 2))
+    return VertexGraph(start, other, np.ascontiguousarray(arrays.rest_length[number]),
+                       np.ascontiguousarray(arrays.group_ks[group]),
+                       np.ascontiguousarray(arrays.group_kd[group]),
+                       colour_start.astype(np.int64), by_colour.astype(np.int64))
+
+
+@kernel
+def greedy_colours(start, other, count):
+    """Each particle the least colour none of its earlier-coloured neighbours has, in particle
+    order."""
+    colour = np.full(count, -1, np.int64)
+    most = 1
+    for i in range(count):
+        most = max(most, start[i + 1] - start[i] + 1)
+    taken = np.full(most + 1, -1, np.int64)   # taken[c] == i: a neighbour of i has colour c
+    for i in range(count):
+        for k in range(start[i], start[i + 1]):
+            c = colour[other[k]]
+            if c >= 0:
+                taken[c] = i
+        c = 0
+        while taken[c] == i:
+            c += 1
+        colour[i] = c
+    return colour
