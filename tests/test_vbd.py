@@ -197,3 +197,12 @@ def test_a_scene_file_sets_the_iterations(tmp_path):
                     '[[bodies]]\ntype = "cloth"\nparticles_per_edge = 5\n')
     sim = Simulation(load_scene(path))
     assert sim.integrator.name == "vbd" and sim.integrator.settings.iterations == 3
+
+
+def test_gradients_refuse_it_in_one_line():
+    """No adjoint yet (issue 57, part 4): springsim.gradient says so before any work."""
+    import springsim
+
+    with pytest.raises(SceneError, match="integrator = 'vbd': has no adjoint yet"):
+        springsim.gradient(small_cloth(), loss=lambda take: 0.0,
+                           wrt=["bodies.0.structural.ks"], integrator="vbd", dt=H, duration=H)

@@ -113,6 +113,12 @@ NOTES = {
     "scene/*/implicit.cg_max_iterations": ("", "most conjugate-gradient iterations per solve"),
     "scene/*/implicit.preconditioner": ("", "\"two_level\" (block Jacobi and a coarse space of "
                                             "aggregates) or \"block_jacobi\" alone"),
+    "scene/*/vbd.iterations": ("", "sweeps over the particles a step of `vbd` takes: more is "
+                                   "closer to backward Euler and costs proportionally more"),
+    "scene/*/vbd.contact_stiffness_ratio": ("", "`vbd`'s terrain contact stiffness as a multiple "
+                                                "of each particle's m/h^2"),
+    "scene/*/vbd.friction_velocity": ("m/s", "`vbd`'s static friction: sliding slower than this "
+                                             "is held (smoothed Coulomb)"),
     "*/*/type": ("", "which kind of body or terrain the table describes"),
     "bodies/*/thickness": ("m", "how far the surface is kept from other surfaces (a pair keeps "
                                 "the mean of its two bodies' thicknesses)"),

@@ -47,6 +47,8 @@ class SimulationDiverged(RuntimeError):
 def _more_stable(integrator: str) -> str:
     if integrator == "implicit_euler":
         return "more Newton iterations (implicit.newton_iterations)"
+    if integrator == "vbd":
+        return "more iterations (vbd.iterations)"
     if integrator == "rk4":
         return "implicit_euler (stable at large steps)"
     return "a more stable integrator (rk4, or implicit_euler for large steps)"

@@ -20,7 +20,7 @@ SAFETY = {"rk4": 1.8}
 DEFAULT_SAFETY = 0.9
 IMPLICIT_STEP = 1 / 60  # s: one step a frame
 NO_SPRINGS_STEP = 1e-3  # s: the course framework's
-IMPLICIT = ("implicit_euler",)
+IMPLICIT = ("implicit_euler", "vbd")   # stable at a frame's step
 
 
 class StepEstimate(NamedTuple):
@@ -52,7 +52,8 @@ def stable_step(model, integrator: str = "rk4") -> StepEstimate:
 
 
 def automatic_step(scene) -> StepEstimate:
-    """The step of a scene that names none: a frame's under implicit_euler, else stable_step."""
+    """The step of a scene that names none: a frame's under the IMPLICIT methods, else
+    stable_step."""
     from .model import build_model
 
     if scene.integrator in IMPLICIT:

@@ -11,6 +11,8 @@ ROLES = [("NONE", "None", "not simulated by springsim"),
          ("BODY", "Jelly body", "a lattice of springs filling the mesh (it needs an inside)"),
          ("COLLIDER", "Collider", "static or animated: what Blender evaluates at each frame")]
 INTEGRATORS = [("implicit_euler", "Backward Euler", "implicit, stable at one step a frame"),
+               ("vbd", "Vertex Block Descent", "backward Euler at a fixed cost a step; "
+                "contact with colliders inside the solve"),
                ("symplectic_euler", "Symplectic Euler", "explicit; needs small steps"),
                ("midpoint", "Midpoint", "explicit second order; needs small steps"),
                ("rk4", "RK4", "explicit fourth order; needs small steps"),
