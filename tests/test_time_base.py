@@ -106,3 +106,25 @@ def test_a_take_of_another_time_base_is_still_refused_without_a_warning(tmp_path
                  "--out", str(tmp_path / "fitted.toml")]) == 2
     err = capsys.readouterr().err
     assert "is not a whole number of steps of dt = 0.007 s" in err and "shorter" not in err
+
+
+def test_a_sweeps_saved_run_is_a_take_fit_accepts_with_the_same_dt(tmp_path, capsys):
+    """A sweep reads `dt = 0.016667` as `run` does, 1/60 s exactly: its saved runs lie on the
+    step grid `fit --dt 0.016667` compares on (they were 0.016667 s apart, 3e-7 s a frame off
+    1/60 s, and fit refused them from the second frame on)."""
+    import springsim
+
+    out = tmp_path / "sweep"
+    table = springsim.sweep("cloth-hang", vary={"bodies.0.structural.ks": [25000.0]},
+                            overrides=["integrator=implicit_euler", "dt=0.016667",
+                                       "bodies.0.particles_per_edge=4", "duration=0.2"],
+                            workers=1, out=str(out), save="npz")
+    take = out / table[0]["npz"]
+    with np.load(take) as arrays:
+        assert float(arrays["dt"]) == 1 / 60
+        np.testing.assert_allclose(arrays["time"], np.arange(13) / 60, rtol=0, atol=1e-15)
+    capsys.readouterr()
+    assert main(["fit", *SMALL, "--observed", str(take), "--fit", "bodies.0.structural.ks",
+                 "--max-iterations", "1", "--out", str(tmp_path / "fitted.toml")]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["loss"] < 1e-20
