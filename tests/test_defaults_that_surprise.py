@@ -19,7 +19,7 @@ from springsim.bodies.mesh import MeshBody
 from springsim.scene import Scene
 from springsim.springs import SpringParameters
 from springsim.terrains.mesh import MeshTerrain
-from springsim.terrains.plane import Plane
+from springsim.terrains.plane import Plane, tilted_plane
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -129,12 +129,31 @@ def test_a_cube_dropped_on_a_plane_collider_rests_on_it_as_blender_exports_them(
     assert -1e-3 <= bottom <= floor.epsilon + 1e-3
 
 
-def test_the_scene_reference_says_where_a_plane_without_a_point_lies():
-    assert Plane().point == (0.0, -1.0, 0.0)
+def point_rows() -> dict:
+    """{terrain type: its `terrains.N.point` row} of the generated scene-file reference."""
     spec = importlib.util.spec_from_file_location("docs_reference_hook",
                                                   ROOT / "docs" / "hooks" / "reference.py")
     hook = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(hook)
-    rows = [line for line in hook.scene_reference_markdown().splitlines()
-            if line.startswith("| `terrains.N.point`")]
-    assert rows and all("y = -1" in row for row in rows), rows
+    rows, kind = {}, None
+    for line in hook.scene_reference_markdown().splitlines():
+        if line.startswith("## [[terrains]] with `type = "):
+            kind = line.split('"')[1]
+        elif line.startswith("| `terrains.N.point`"):
+            rows[kind] = line
+    return rows
+
+
+def test_the_scene_reference_says_where_a_plane_without_a_point_lies():
+    assert Plane().point == (0.0, -1.0, 0.0)
+    rows = point_rows()
+    assert set(rows) == {"plane", "tilted_plane"}, rows
+    assert "`[0.0, -1.0, 0.0]`" in rows["plane"] and "y = -1" in rows["plane"], rows["plane"]
+
+
+def test_the_tilted_planes_point_row_says_the_origin_its_default():
+    """Each kind's row says its own default: the tilted plane's point is the origin (its row
+    said y = -1, the level plane's)."""
+    assert tilted_plane().point == (0.0, 0.0, 0.0)
+    row = point_rows()["tilted_plane"]
+    assert "`[0.0, 0.0, 0.0]`" in row and "the origin" in row and "y = -1" not in row, row

@@ -269,6 +269,24 @@ def test_every_relative_link_of_the_docs_names_a_file_of_the_clone():
     assert dead == []
 
 
+def test_every_api_page_says_where_its_text_is_when_read_in_a_clone():
+    """An API page is mkdocstrings directives (`::: NAME`) that only the site's build fills in:
+    read in a clone (as getting-started's link to api/simulation.md is), it must still say
+    where its text is, the names it documents and the `python -m pydoc` that prints them."""
+    import pydoc
+
+    for page in sorted((ROOT / "docs" / "api").glob("*.md")):
+        text = page.read_text(encoding="utf-8")
+        names = re.findall(r"^::: (\S+)", text, re.M)
+        prose = " ".join(line for line in text.splitlines()
+                         if not line.startswith((":::", "    "))).replace("  ", " ")
+        assert names, page
+        for name in names:
+            assert pydoc.locate(name) is not None, (page.name, name)
+            assert f"`{name}`" in prose, (page.name, name)
+        assert f"`python -m pydoc {names[0]}`" in prose, page.name
+
+
 # --- version, changelog, README -------------------------------------------------------------------
 
 def test_version_is_the_package_version_and_the_changelog_top_release():

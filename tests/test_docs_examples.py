@@ -40,6 +40,7 @@ class Block:
     code: str
     no_run: str | None = None    # the reason, where the block must not run
     file: str | None = None      # the file a toml block is written to
+    printed: str | None = None   # what the block printed on stdout, once it ran
 
     def label(self) -> str:
         first = self.code.strip().splitlines()[0] if self.code.strip() else ""
@@ -138,6 +139,7 @@ def run_page(path: Path, folder: Path, timeout: float = 600) -> list[Block]:
         assert done.returncode == 0, (
             f"{block.label()} failed with exit code {done.returncode}\n"
             f"--- stdout ---\n{done.stdout[-3000:]}\n--- stderr ---\n{done.stderr[-3000:]}")
+        block.printed = done.stdout
         ran.append(block)
     return ran
 
@@ -162,6 +164,12 @@ def test_page_examples_run(page, tmp_path):
         check_sweep_rows_differ(tmp_path / "sweep" / "results.csv")
     if page == "docs/getting-started.md":
         check_runs_differ(tmp_path / "soft_bowl.npz", tmp_path / "sticky.npz")
+    if page == "docs/tutorials/cloth-and-balls.md":
+        check_runs_differ(tmp_path / "cloth-drape.npz", tmp_path / "thick.npz")
+    if page == "docs/tutorials/sweeps.md":
+        check_sweep_rows_differ(tmp_path / "sweep-ks" / "results.csv")
+        python = [block for block in ran if block.language == "python"]
+        check_printed_rows_differ(python[0].printed)
 
 
 def check_runs_differ(*recordings: Path, by: float = 0.01):
@@ -191,6 +199,13 @@ def check_sweep_rows_differ(table: Path, by: float = 1e-3):
         for b in range(a):
             scale = np.abs(rows[a]) + np.abs(rows[b]) + 1e-12
             assert (np.abs(rows[a] - rows[b]) / scale).max() > by, (a, b, rows[a], rows[b])
+
+
+def check_printed_rows_differ(printed: str):
+    """An example that prints a row per varied run shows the effect: the rows' last numbers
+    (the result it prints) all differ."""
+    results = [line.split()[-1] for line in printed.strip().splitlines()]
+    assert len(results) > 1 and len(set(results)) == len(results), printed
 
 
 def check_recording_is_documented(recording: Path):

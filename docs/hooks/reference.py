@@ -220,9 +220,11 @@ NOTES = {
                               "`position`, `rotation_degrees`, `rotation_axis`) with "
                               "`interpolation`, or `velocity` and `angular_velocity`, about "
                               "`pivot` ([Scene files](../scene-files.md#moving-terrains))"),
-    "terrains/*/point": ("m", "a point of the plane; left out, (0, -1, 0): a level plane "
-                              "lies at y = -1 (the course framework's floor), not through the "
-                              "origin"),
+    "terrains/plane/point": ("m", "a point of the plane; left out, (0, -1, 0): a level plane "
+                                  "lies at y = -1 (the course framework's floor), not through "
+                                  "the origin"),
+    "terrains/tilted_plane/point": ("m", "a point of the plane; left out, the origin: the "
+                                         "course's tilted plane passes through it"),
     "terrains/*/normal": ("", "normal towards the free side (any length but zero)"),
     "terrains/sphere/center": ("m", "centre; bodies collide with its outside"),
     "terrains/bowl/center": ("m", "centre; bodies stay inside it"),

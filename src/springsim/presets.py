@@ -88,6 +88,12 @@ def cloth_drape() -> Scene:
                  duration=4.0)
 
 
+def micrometres(length: float) -> float:
+    """A length made by a float sum, to the micrometre, so that a printed scene says 2.19 where
+    the sum left 2.1900000000000004 (`springsim scenes`)."""
+    return round(length, 6)
+
+
 def hanging_sheet(particles: int, width: float, height: float, top: float, pins_at: str,
                   **place) -> Cloth:
     """A cloth hanging in the plane z = 0 (turned up from the grid's xz plane) with a light
@@ -96,9 +102,10 @@ def hanging_sheet(particles: int, width: float, height: float, top: float, pins_
                   rotation_degrees=90.0, rotation_axis=(1.0, 0.0, 0.0),
                   material=ClothMaterial(density=0.2), **place)
     x, y = cloth.position[0], cloth.position[1]
-    edge = (Region(min=(-10.0, top - 0.01, -0.1), max=(10.0, top + 0.01, 0.1)) if pins_at == "top"
-            else Region(min=(x - width / 2 - 0.01, y - height, -0.1),
-                        max=(x - width / 2 + 0.01, y + height, 0.1)))
+    edge = (Region(min=(-10.0, micrometres(top - 0.01), -0.1),
+                   max=(10.0, micrometres(top + 0.01), 0.1)) if pins_at == "top"
+            else Region(min=(micrometres(x - width / 2 - 0.01), micrometres(y - height), -0.1),
+                        max=(micrometres(x - width / 2 + 0.01), micrometres(y + height), 0.1)))
     cloth.pins = [Pin(region=edge)]
     return cloth
 
@@ -144,11 +151,9 @@ def cape() -> Scene:
     files = figure_files()
     figure = MeshTerrain(file=str(files.mesh), friction=0.4, restitution=0.0,
                          animation=Animation(str(files.cache), fps=FIGURE_FPS))
-    # lengths to the micrometre, so that the printed scene says 1.59 where a float sum would
-    # leave 1.5899999999999999
-    y = round(float(NECK[1]) + 0.01, 6)   # a centimetre over the top of the figure's body
-    neck = Pin(region=Region(min=(-NECK_HALF_WIDTH, round(y - 0.005, 6), NECK[2] - 0.006),
-                             max=(NECK_HALF_WIDTH, round(y + 0.005, 6), NECK[2] + 0.006)),
+    y = micrometres(float(NECK[1]) + 0.01)   # a centimetre over the top of the figure's body
+    neck = Pin(region=Region(min=(-NECK_HALF_WIDTH, micrometres(y - 0.005), NECK[2] - 0.006),
+                             max=(NECK_HALF_WIDTH, micrometres(y + 0.005), NECK[2] + 0.006)),
                follow="terrains.1")
     # a fabric that bends softly (the default sheet's 50 N/m holds a cape out like a board),
     # and no drag: the reference cloth's 3.4e-4 N s/m a particle would hold these 48 mg

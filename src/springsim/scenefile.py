@@ -94,11 +94,11 @@ def with_automatic_step(scene: Scene) -> Scene:
 
     estimate = automatic_step(scene)
     warnings.warn(f"the scene gives no dt: dt = {estimate.dt:.3g} s, from {estimate.basis}",
-                  AutomaticStep, stacklevel=_user_level())
+                  AutomaticStep, stacklevel=user_stacklevel())
     return dataclasses.replace(scene, dt=estimate.dt)
 
 
-def _user_level() -> int:
+def user_stacklevel() -> int:
     """The ``stacklevel`` that makes a warning from the function calling this one name the
     first caller outside springsim (the user's line, however deep in springsim the warning
     starts): Python 3.12's ``skip_file_prefixes``, which 3.11 lacks."""

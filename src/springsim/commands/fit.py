@@ -112,7 +112,8 @@ def plot_fit(result, loss, path) -> None:
     left.set_ylabel("loss (m²)")
     if hasattr(loss, "positions") and result.frames is not None:
         right.plot(loss.time, loss.positions[:, :, 1].mean(axis=1), label="observed")
-        right.plot(loss.time, result.frames[:, :, 1].mean(axis=1), "--", label="fitted")
+        fitted = result.frames   # the frames compared (a take's last, after a shorter step, not)
+        right.plot(loss.time[:len(fitted)], fitted[:, :, 1].mean(axis=1), "--", label="fitted")
         right.set_xlabel("time (s)")
         right.set_ylabel("mean height (m)")
         right.legend()

@@ -17,6 +17,7 @@ work (``check``: one clear line), and maps the positions at those steps (F, P, 3
 """
 import csv
 import math
+import warnings
 import zipfile
 import zlib
 from pathlib import Path
@@ -38,6 +39,23 @@ def steps_of(times, dt, key):
                          f"is not a whole number of steps of dt = {dt:g} s: choose a dt that "
                          "divides the observed times (the take's time base)")
     return steps.astype(np.int64)
+
+
+class ShorterLastStep(UserWarning):
+    """A take's last frame follows a step shorter than dt (the run ended at its duration, which
+    dt does not divide) and is left out of the comparison."""
+
+
+def after_a_shorter_step(times, dt) -> bool:
+    """Whether the last of ``times`` is off the step grid of ``dt`` with no whole step between it
+    and the frame before: the last frame `springsim run` records when dt does not divide the
+    duration, after a shorter step (recording.last_steps)."""
+    times = np.asarray(times, float)
+    if len(times) < 2:
+        return False
+    last, tolerance = float(times[-1]), TIME_MATCH * dt + 1e-12
+    whole = math.floor(last / dt + TIME_MATCH) * dt
+    return last - whole > tolerance and whole >= float(times[-2]) - tolerance
 
 
 def read_take(path, source: str) -> dict:
@@ -89,6 +107,7 @@ class ObservedTake:
         require(np.all(self.time >= 0), "--observed", self.source, f"has the time "
                 f"{float(np.min(self.time))!r} s: the run starts at 0 s, so a frame's time must "
                 "be >= 0 s")
+        self.compared = len(self.time)   # the frames compared (check leaves one out)
 
     def check(self, model, duration, dt):
         count = model.particle_count
@@ -96,13 +115,22 @@ class ObservedTake:
                 f"has {self.positions.shape[1]} particles; the scene has {count}")
         require(self.time[-1] <= duration + 1e-9, "--observed", self.source,
                 f"ends at {self.time[-1]:g} s, after the run's {duration:g} s")
-        self._steps = steps_of(self.time, dt, "--observed")
+        # a take `run` recorded over a duration that dt does not divide ends after a shorter
+        # step, which a fit (whole steps of dt) does not take: its last frame is left out, said
+        self.compared = len(self.time) - after_a_shorter_step(self.time, dt)
+        steps_of(self.time[:self.compared], dt, "--observed")
+        if self.compared < len(self.time):
+            from ..scenefile import user_stacklevel
+            warnings.warn(f"{self.source}: the last frame, at {self.time[-1]:g} s, follows a "
+                          f"step shorter than dt = {dt:g} s (the run ended at its duration): "
+                          f"compared at the {self.compared} frames before it, on whole steps",
+                          ShorterLastStep, stacklevel=user_stacklevel())
 
     def frame_steps(self, duration, dt, particles):
-        return steps_of(self.time, dt, "--observed")
+        return steps_of(self.time[:self.compared], dt, "--observed")
 
     def __call__(self, frames):
-        difference = frames - self.positions
+        difference = frames - self.positions[:self.compared]
         count = difference.shape[0] * difference.shape[1]
         return (float(np.sum(difference * difference)) / count, 2.0 * difference / count)
 

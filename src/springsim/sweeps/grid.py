@@ -16,11 +16,12 @@ import hashlib
 import itertools
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import require
+from ..sampling import frame_step
 from ..scenefile import (AutomaticStep, apply_override, load_scene, parse_value, scene_to_toml,
                          toml_value)
 
@@ -100,6 +101,9 @@ def build_grid(scene: str, variations, *, overrides=(), seeds: int | None = None
         varied = base
         for key, value in settings:
             varied = apply_override(varied, f"{key}={toml_value(value)}")
+        # a dt that is a frame's step written short is that step, as `run` and `fit` read it
+        # (sampling.frame_step): a saved run is then a take `fit` accepts with the same dt
+        varied = replace(varied, dt=frame_step(varied.dt, fps))
         varied.validate()
         for seed in seed_values:
             specs.append(RunSpec(index=len(specs), settings=settings, seed=seed, scene=varied,
