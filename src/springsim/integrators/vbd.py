@@ -74,19 +74,21 @@ def term_layout(arrays) -> TermLayout:
 
 @inline_kernel
 def vbd_step(model, state, scratch, h, pairs):
-    """One step: the world and the moving pins at the step's end, the first guess, ``iterations``
-    sweeps colour by colour, then v = (x - x0) / h (module doc)."""
-    graph, settings, layout, x0, y, v_k, term_force, term_blocks = scratch
+    """One step: the world and the moving pins at the step's end, the first guess, the terrains
+    near it, ``iterations`` sweeps colour by colour, then v = (x - x0) / h (module doc)."""
+    graph, settings, layout, x0, y, v_k, term_force, term_blocks, planes = scratch
     x, v, memory = state.x, state.v, state.memory
     move_world(model, step_end(model, h))
     aim_pins(model, x, v, h)
     start_guess(model, x, v, memory.velocity_change, h, x0, y)
+    find_terrain_planes(model, x, planes)
     for _ in range(settings.iterations):
         linearize_terms(model, layout, x, x0, h, v_k, term_force, term_blocks)
         for colour in range(graph.colour_start.shape[0] - 1):
-            sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, memory, h)
+            sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes,
+                  memory, h)
     end_velocities(x, x0, v, memory.velocity_change, h)
-    keep_friction(model, settings, x, memory, h)
+    keep_friction(model, settings, x, planes, memory, h)
     return pairs
 
 
@@ -111,6 +113,41 @@ def start_guess(model, x, v, velocity_change, h, x0, y):
             x[i, c] = x[i, c] + h * v[i, c] + free * along * h * h * g[c]
 
 
+@inline_kernel
+def find_terrain_planes(model, x, planes):
+    """planes[i, t] = (n, c, w): terrain t near particle i as the plane phi(x) = n . x + c
+    touching it at the particle's first guess, and its surface's velocity w there: contact is
+    found once a step (as VBD finds it), and the sweeps read these planes, not the terrains. A
+    lookup on a deforming mesh near its surface costs tens of microseconds, which every block
+    step of every iteration cannot pay. c = inf: out of the terrain's reach (a deforming mesh
+    answers infinity beyond it)."""
+    inv_mass, offset = model.inv_mass, model.terrain_offset
+    band = model.terrain_epsilon
+    kind, parameters, data = model.terrain_kind, model.terrain_parameters, model.terrain_data
+    motion, deforming = model.terrain_motion, model.terrain_deforming
+    terrains = terrain_view(model)
+    for i in prange(x.shape[0]):
+        for t in range(band.shape[0]):
+            for k in range(7):   # no plane: phi = 0 . x + inf
+                planes[i, t, k] = np.inf if k == 3 else 0.0
+            if inv_mass[i] == 0.0:
+                continue
+            still = motion[t] < 0 and deforming[t] < 0
+            if still:   # looked up on the model's arrays, as collision/response/terrain.py does
+                phi, nx, ny, nz = still_terrain_distance(kind[t], parameters[t], data, x[i, 0],
+                                                         x[i, 1], x[i, 2], offset[i])
+            else:
+                phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], offset[i])
+            if not phi < np.inf:
+                continue
+            u0 = u1 = u2 = 0.0
+            if not still:
+                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
+            planes[i, t, 0], planes[i, t, 1], planes[i, t, 2] = nx, ny, nz
+            planes[i, t, 3] = phi - nx * x[i, 0] - ny * x[i, 1] - nz * x[i, 2]
+            planes[i, t, 4], planes[i, t, 5], planes[i, t, 6] = u0, u1, u2
+
+
 @kernel
 def linearize_terms(model, layout, x, x0, h, v_k, force, blocks):
     """force = h F of every term at (x, (x - x0) / h), blocks = its share of backward Euler's
@@ -125,15 +162,12 @@ def linearize_terms(model, layout, x, x0, h, v_k, force, blocks):
 
 
 @inline_kernel
-def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, memory, h):
+def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes, memory, h):
     """One block step for each particle of ``colour`` (vbd/vertex.py), in parallel: they share
-    no spring. Friction is lagged from the last step (``memory``: vbd/contact.py). The model's
-    arrays are read as locals, which a threaded loop can take."""
-    inv_mass, drag, offset = model.inv_mass, model.drag, model.terrain_offset
-    band = model.terrain_epsilon
-    kind, parameters, data = model.terrain_kind, model.terrain_parameters, model.terrain_data
-    motion, deforming = model.terrain_motion, model.terrain_deforming
-    terrains = terrain_view(model)
+    no spring. The terrains are the step's planes (find_terrain_planes); friction is lagged from
+    the last step (``memory``: vbd/contact.py). The model's arrays are read as locals, which a
+    threaded loop can take."""
+    inv_mass, drag, band = model.inv_mass, model.drag, model.terrain_epsilon
     start, other, rest_length, ks, kd = (graph.start, graph.other, graph.rest_length, graph.ks,
                                         graph.kd)
     particles = graph.particles
@@ -154,21 +188,15 @@ def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, mem
             block = added(block, spring_share(x, x0, i, other[k], rest_length[k], ks[k], kd[k],
                                               h))
         for t in range(band.shape[0]):
-            still = motion[t] < 0 and deforming[t] < 0
-            if still:
-                phi, nx, ny, nz = still_terrain_distance(kind[t], parameters[t], data, x[i, 0],
-                                                         x[i, 1], x[i, 2], offset[i])
-            else:
-                phi, nx, ny, nz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], offset[i])
+            plane = planes[i, t]
+            phi = plane[0] * x[i, 0] + plane[1] * x[i, 1] + plane[2] * x[i, 2] + plane[3]
             delta = OFFSET_OF_BAND * band[t]
             rubbing = pressed[i] if rubbed[i] == t else 0.0
-            if phi >= delta and rubbing == 0.0:
+            if not (phi < delta or (rubbing > 0.0 and phi < np.inf)):   # far, or out of reach
                 continue
-            u0 = u1 = u2 = 0.0
-            if not still:
-                u0, u1, u2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
-            block = added(block, contact_share(phi, nx, ny, nz, ratio * inertia, delta, rubbing,
-                                               m0 - h * u0, m1 - h * u1, m2 - h * u2, smoothing))
+            block = added(block, contact_share(
+                phi, plane[0], plane[1], plane[2], ratio * inertia, delta, rubbing,
+                m0 - h * plane[4], m1 - h * plane[5], m2 - h * plane[6], smoothing))
         d0, d1, d2 = solve_block(block)
         x[i, 0] += d0
         x[i, 1] += d1
@@ -176,12 +204,11 @@ def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, mem
 
 
 @inline_kernel
-def keep_friction(model, settings, x, memory, h):
+def keep_friction(model, settings, x, planes, memory, h):
     """For the next step's friction (vbd/contact.py): each particle's terrain pressed hardest at
-    x (memory.terrain, -1 for none) and mu lambda there (memory.friction_damping)."""
-    inv_mass, offset = model.inv_mass, model.terrain_offset
-    band, friction = model.terrain_epsilon, model.terrain_friction
-    terrains = terrain_view(model)
+    x (memory.terrain, -1 for none), by the step's planes, and mu lambda there
+    (memory.friction_damping)."""
+    inv_mass, band, friction = model.inv_mass, model.terrain_epsilon, model.terrain_friction
     ratio = settings.contact_stiffness_ratio
     rubbed, pressed = memory.terrain, memory.friction_damping
     for i in prange(x.shape[0]):
@@ -190,12 +217,12 @@ def keep_friction(model, settings, x, memory, h):
             continue
         hardest = 0.0
         for t in range(band.shape[0]):
-            phi, _, _, _ = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], offset[i])
+            plane = planes[i, t]
+            phi = plane[0] * x[i, 0] + plane[1] * x[i, 1] + plane[2] * x[i, 2] + plane[3]
             pressure = contact_pressure(phi, ratio / (inv_mass[i] * h * h),
                                         OFFSET_OF_BAND * band[t])
             if pressure > hardest:
                 hardest, rubbed[i], pressed[i] = pressure, t, friction[t] * pressure
-    return
 
 
 @inline_kernel
@@ -211,11 +238,12 @@ def end_velocities(x, x0, v, velocity_change, h):
 # --- the driver ---------------------------------------------------------------------------------
 
 @kernel
-def vbd_scratch(graph, settings, layout, x):
+def vbd_scratch(graph, settings, layout, x, terrain_count):
     """What vbd_step takes besides the state, as a plain tuple (a threaded kernel's array
     analysis cannot take a NamedTuple apart: _steps.py)."""
     return (graph, settings, layout, np.empty_like(x), np.empty_like(x), np.empty_like(x),
-            np.empty_like(x), np.zeros((x.shape[0] + 1, 3, 3)))
+            np.empty_like(x), np.zeros((x.shape[0] + 1, 3, 3)),
+            np.empty((x.shape[0], terrain_count, 7)))
 
 
 threaded_vbd_step = threaded(vbd_step)
@@ -225,7 +253,8 @@ threaded_vbd_step = threaded(vbd_step)
 def advance(model, graph, settings, layout, state, h, steps, pairs):
     """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
     done, first diverged particle or -1, the post-step pass's pair list: _steps.drive)."""
-    return drive(vbd_step, model, state, vbd_scratch(graph, settings, layout, state.x), h,
+    return drive(vbd_step, model, state, vbd_scratch(graph, settings, layout, state.x,
+                                      model.terrain_epsilon.shape[0]), h,
                  steps, pairs)
 
 
@@ -233,7 +262,8 @@ def advance(model, graph, settings, layout, state, h, steps, pairs):
 def parallel_advance(model, graph, settings, layout, state, h, steps, pairs):
     """advance, each colour's particles on threads."""
     return threaded_drive(threaded_vbd_step, model, state,
-                          vbd_scratch(graph, settings, layout, state.x), h, steps, pairs)
+                          vbd_scratch(graph, settings, layout, state.x,
+                                      model.terrain_epsilon.shape[0]), h, steps, pairs)
 
 
 THREADED_FROM = 2048   # free particles from which a model runs the threaded kernel
