@@ -89,6 +89,8 @@ NOTES = {
     "scene/*/wind": ("", "moving air: `velocity` or `keyframes`, `density`, `drag`, "
                          "`friction`, `gusts` ([Scene files](../scene-files.md#wind))"),
     "scene/*/implicit": ("", "settings of `implicit_euler`, checked whatever the integrator"),
+    "scene/*/vbd": ("", "settings of `vbd` (vertex block descent), checked whatever the "
+                       "integrator"),
     "scene/*/attachments": ("", "the `[[attachments]]` tables: particles of one body bound to "
                                 "another body's surface, hard or soft "
                                 "([Scene files](../scene-files.md#attachments))"),
