@@ -16,7 +16,7 @@ from springsim.scene import Scene
 from springsim.scenefile import load_scene
 from springsim.springs import SpringParameters
 from springsim.terms.attractor import Attractor
-from springsim.terrains import tilted_plane
+from springsim.terrains import Plane, tilted_plane
 from test_implicit import sliding_cube as implicit_sliding_cube
 
 H = 1.0 / 60.0
@@ -206,3 +206,21 @@ def test_gradients_refuse_it_in_one_line():
     with pytest.raises(SceneError, match="integrator = 'vbd': has no adjoint yet"):
         springsim.gradient(small_cloth(), loss=lambda take: 0.0,
                            wrt=["bodies.0.structural.ks"], integrator="vbd", dt=H, duration=H)
+
+
+@pytest.mark.parametrize("dt", [1 / 60, 1 / 240])
+def test_a_ball_bounces_off_the_floor_with_its_restitution(dt):
+    """The minimization stops an approach dead; the approach speed is restored for the impact
+    pass, which reflects it: the first bounce leaves at e times the speed it arrived with."""
+    ball = Ball(position=(0.0, 1.0, 0.0), radius=0.1, mass=1.0)
+    scene = Scene(bodies=[Balls(balls=[ball], drag=0.0)],
+                  terrains=[Plane(restitution=0.5, friction=0.0)], gravity=EARTH_GRAVITY)
+    sim = Simulation(scene, integrator="vbd", dt=dt)
+    while True:
+        arriving = sim.velocities[0, 1]
+        sim.step(1)
+        if sim.velocities[0, 1] > 0.0:
+            break
+    assert arriving < -5.0
+    assert sim.velocities[0, 1] == pytest.approx(-0.5 * arriving, rel=1e-12)
+    assert Plane().signed_distance(sim.positions, 0.1).min() >= 0.0

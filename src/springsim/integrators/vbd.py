@@ -20,6 +20,7 @@ kernel with the same bits as on one.
 After the step comes the pass every integrator runs (_steps.drive): the moving pins on their
 paths, hard attachments held, impacts with restitution, body-body and self contact.
 """
+import math
 from typing import NamedTuple
 
 import numba
@@ -87,7 +88,7 @@ def vbd_step(model, state, scratch, h, pairs):
         for colour in range(graph.colour_start.shape[0] - 1):
             sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes,
                   memory, h)
-    end_velocities(x, x0, v, memory.velocity_change, h)
+    end_velocities(model, planes, x, x0, v, memory.velocity_change, h)
     keep_friction(model, settings, x, planes, memory, h)
     return pairs
 
@@ -226,13 +227,55 @@ def keep_friction(model, settings, x, planes, memory, h):
 
 
 @inline_kernel
-def end_velocities(x, x0, v, velocity_change, h):
-    """v = (x - x0) / h, the change kept for the next step's guess."""
+def end_velocities(model, planes, x, x0, v, velocity_change, h):
+    """v = (x - x0) / h, the change kept for the next step's guess; then each impact's approach
+    speed restored (``restored_impact``), for the pass after the step to reflect with the
+    terrain's restitution."""
+    inv_mass, band, g = model.inv_mass, model.terrain_epsilon, model.gravity
+    resting = 2.0 * math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     for i in prange(x.shape[0]):
         for c in range(3):
             new = (x[i, c] - x0[i, c]) / h
             velocity_change[i, c] = new - v[i, c]
             v[i, c] = new
+        if inv_mass[i] > 0.0:
+            restored_impact(planes[i], band, resting, x[i], x0[i], v0_of(v, velocity_change, i),
+                            v[i])
+
+
+@inline_kernel
+def v0_of(v, velocity_change, i):
+    """The velocity particle i started the step with."""
+    return (v[i, 0] - velocity_change[i, 0], v[i, 1] - velocity_change[i, 1],
+            v[i, 2] - velocity_change[i, 2])
+
+
+@inline_kernel
+def restored_impact(planes, band, resting, x, x0, v0, v):
+    """The minimization stops an approach dead (contact inside it is inelastic). Where a
+    particle started the step out of terrain t's band, ends it inside, and approached faster
+    than resting contact does (sqrt(2 |g| epsilon), the impact pass's own threshold), its
+    normal velocity relative to the surface is put back to the approach's, as backward Euler
+    restores it (implicit/constraints.restore_impact_speeds): the impact pass after the step
+    then reflects it, v_n' = -e v_n. ``resting``: 2 |g|."""
+    for t in range(band.shape[0]):
+        n0, n1, n2, offset = planes[t, 0], planes[t, 1], planes[t, 2], planes[t, 3]
+        if not offset < np.inf:
+            continue
+        start = n0 * x0[0] + n1 * x0[1] + n2 * x0[2] + offset
+        end = n0 * x[0] + n1 * x[1] + n2 * x[2] + offset
+        w0, w1, w2 = planes[t, 4], planes[t, 5], planes[t, 6]
+        approach = (v0[0] - w0) * n0 + (v0[1] - w1) * n1 + (v0[2] - w2) * n2
+        if not (start >= band[t] and end < band[t]
+                and approach < -math.sqrt(resting * band[t])):
+            continue
+        now = (v[0] - w0) * n0 + (v[1] - w1) * n1 + (v[2] - w2) * n2
+        if now > approach:
+            change = approach - now
+            v[0] += change * n0
+            v[1] += change * n1
+            v[2] += change * n2
+        return
 
 
 # --- the driver ---------------------------------------------------------------------------------
