@@ -117,10 +117,18 @@ def test_a_collapsing_cloth_never_crosses_itself_implicit_euler():
 
 # -- momentum is conserved in body-body contact ---------------------------------------------
 
+# vbd conserves momentum only as far as its block descent converges: a sweep moves each
+# particle against the others' latest positions, so a spring's two ends do not feel equal and
+# opposite forces until the step's minimum is reached (measured at its default 10 iterations:
+# 1.6e-11 to 3.9e-11 of the momentum scale, where the explicit methods keep 1e-12)
+MOMENTUM_TOLERANCE = {"vbd": 1e-9}
+
+
 @pytest.mark.parametrize("integrator", EXPLICIT)
 def test_momentum_is_conserved_in_body_body_contact(integrator):
     """Two cubes of different masses, no gravity, no terrain, thrown at each other off-centre
-    (friction acts too): the total momentum before and after is the same to round-off."""
+    (friction acts too): the total momentum before and after is the same to round-off (vbd: to
+    what its iterations leave, MOMENTUM_TOLERANCE)."""
     a = Cube(particles_per_edge=4, edge_length=1.0, position=(-0.8, 0.0, 0.0),
              velocity=(3.0, 0.5, 0.0), particle_mass=1.0)
     b = Cube(particles_per_edge=4, edge_length=1.0, position=(0.8, 0.3, 0.2),
@@ -141,7 +149,8 @@ def test_momentum_is_conserved_in_body_body_contact(integrator):
     after = momentum()
     # they touched: the first cube's velocity along x changed by far more than round-off
     assert abs(simulation.velocities[first, 0].mean() - approach) > 0.5
-    assert np.all(np.abs(after - before) <= 1e-12 * scale), (after - before) / scale
+    tolerance = MOMENTUM_TOLERANCE.get(integrator, 1e-12)
+    assert np.all(np.abs(after - before) <= tolerance * scale), (after - before) / scale
 
 
 # -- a cube sliding on a cube obeys g (sin - mu cos) ------------------------------------------
