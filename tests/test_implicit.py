@@ -443,6 +443,16 @@ def test_ball_on_a_slope_slides_at_the_coulomb_acceleration(dt):
     assert abs(simulation.velocities[0, 2]) == 0.0
 
 
+def first_bounce(simulation) -> float:
+    """Step a lone ball until it first moves up; returns its vertical speed in the step before,
+    the speed it arrived with."""
+    while True:
+        approach = simulation.velocities[0, 1]
+        simulation.step(1)
+        if simulation.velocities[0, 1] > 0.0:
+            return approach
+
+
 def test_restitution_reflects_the_approach_speed():
     """A ball dropped 2.5 m onto the plane leaves it at e times the speed it came in with, even
     at a step that carries it 0.1 m past the surface; as dt shrinks that speed tends to
@@ -452,11 +462,7 @@ def test_restitution_reflects_the_approach_speed():
         scene = Scene(name="ball", bodies=[Balls(balls=[ball])], terrains=[Plane()],
                       gravity=EARTH_GRAVITY)
         simulation = Simulation(scene, integrator="implicit_euler", dt=dt)
-        while True:
-            approach = simulation.velocities[0, 1]
-            simulation.step(1)
-            if simulation.velocities[0, 1] > 0.0:
-                break
+        approach = first_bounce(simulation)
         # e times the approach speed, up to the one step of gravity the impact step adds
         assert abs(simulation.velocities[0, 1] + 0.8 * approach) <= 0.8 * 9.8 * dt * (1 + 1e-9)
         assert -approach == pytest.approx(np.sqrt(2 * 9.8 * 2.5), rel=tolerance)
