@@ -4,12 +4,14 @@ backward Euler step as iterations grow (a measured curve); Coulomb friction on s
 g (sin a - mu cos a) and holds where mu > tan a; a cube falls onto the floor and comes to rest
 on it without sinking or jittering; a linear term (the attractor) is backward Euler's
 oscillator; threads change no bit; bad settings are one line."""
+import numba
 import numpy as np
 import pytest
 
 from conftest import EARTH_GRAVITY
 from springsim import SceneError, Simulation
 from springsim.bodies.balls import Ball, Balls
+from springsim.clock import CALL_START
 from springsim.bodies.cloth import Cloth
 from springsim.bodies.cube import Cube
 from springsim.scene import Scene
@@ -169,9 +171,8 @@ def test_threads_change_no_bit():
         sim = Simulation(load_scene("cloth-drape"), integrator="vbd", dt=H)
         integrator, model = sim.integrator, sim.model
         call = integrator.kernel_call(model, sim.state, H, 20, threaded=threaded)
-        import numba
         numba.set_num_threads(threads)
-        model.arrays.clock[0] = 0.0
+        model.arrays.clock[CALL_START] = 0.0
         call.kernel(*call.arguments)
         runs.append(sim.state.positions.copy())
     assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[1], runs[2])

@@ -23,22 +23,20 @@ paths, hard attachments held, impacts with restitution, body-body and self conta
 import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
 from numba import prange
 
 from .._jit import inline_kernel, kernel, parallel_kernel
-from ..clock import CALL_START
 from ..errors import SceneError, require
 from ..terms import add_external_jacobians, add_step_end_forces
 from ..terrains import still_terrain_distance
 from ..vbd.contact import OFFSET_OF_BAND, contact_pressure, contact_share
-from ..vbd.graph import VertexGraph, vertex_graph
+from ..vbd.graph import vertex_graph
 from ..vbd.vertex import added, solve_block, spring_share
 from ..world import aim_pins, move_world, step_end, surface_velocity, terrain_at, terrain_view
-from .base import Integrator, KernelCall, register
+from .base import KernelCall, KernelIntegrator, register
 from ._steps import drive, threaded, threaded_drive
-from .implicit_euler import ImplicitState
+from .implicit_euler import ImplicitState, _is_number, _is_whole
 
 
 class Settings(NamedTuple):
@@ -296,27 +294,28 @@ threaded_vbd_step = threaded(vbd_step)
 def advance(model, graph, settings, layout, state, h, steps, pairs):
     """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
     done, first diverged particle or -1, the post-step pass's pair list: _steps.drive)."""
-    return drive(vbd_step, model, state, vbd_scratch(graph, settings, layout, state.x,
-                                      model.terrain_epsilon.shape[0]), h,
-                 steps, pairs)
+    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0])
+    return drive(vbd_step, model, state, scratch, h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, graph, settings, layout, state, h, steps, pairs):
     """advance, each colour's particles on threads."""
-    return threaded_drive(threaded_vbd_step, model, state,
-                          vbd_scratch(graph, settings, layout, state.x,
-                                      model.terrain_epsilon.shape[0]), h, steps, pairs)
+    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0])
+    return threaded_drive(threaded_vbd_step, model, state, scratch, h, steps, pairs)
 
 
 THREADED_FROM = 2048   # free particles from which a model runs the threaded kernel
 
 
 @register
-class VertexBlockDescent(Integrator):
+class VertexBlockDescent(KernelIntegrator):
     """Options (scene ``[vbd]``): ``iterations`` (sweeps a step, default 10),
     ``contact_stiffness_ratio`` (terrain contact stiffness over a particle's m/h^2, default
-    1,000) and ``friction_velocity`` (m/s, default 0.001: slower sliding is held)."""
+    1,000) and ``friction_velocity`` (m/s, default 0.001: slower sliding is held). Its kernels
+    take the model's graph and settings besides the state (``kernel_call``), and it picks the
+    threaded one by its free particles (THREADED_FROM); KernelIntegrator's ``advance`` calls
+    them."""
 
     name = "vbd"
     order = 1
@@ -324,19 +323,21 @@ class VertexBlockDescent(Integrator):
                "a fixed cost a step")
     SECTION = "vbd"
     OPTIONS = ("iterations", "contact_stiffness_ratio", "friction_velocity")
+    kernel = staticmethod(advance)
+    parallel_kernel = staticmethod(parallel_advance)
 
     def __init__(self, iterations=10, contact_stiffness_ratio=1000.0, friction_velocity=1e-3,
                  **others):
         for key, value in others.items():
             raise SceneError(f"integrator option {key}", value,
                              f"'{self.name}' takes only " + ", ".join(self.OPTIONS))
-        require(isinstance(iterations, (int, np.integer)) and not isinstance(iterations, bool)
-                and 1 <= iterations <= 10000, "vbd.iterations", iterations,
+        require(_is_whole(iterations) and 1 <= iterations <= 10000, "vbd.iterations", iterations,
                 "must be a whole number from 1 to 10000")
-        require(_positive(contact_stiffness_ratio), "vbd.contact_stiffness_ratio",
-                contact_stiffness_ratio, "must be a number > 0 (times m/h^2)")
-        require(_positive(friction_velocity), "vbd.friction_velocity", friction_velocity,
-                "must be a speed > 0 m/s")
+        require(_is_number(contact_stiffness_ratio) and contact_stiffness_ratio > 0,
+                "vbd.contact_stiffness_ratio", contact_stiffness_ratio,
+                "must be a number > 0 (times m/h^2)")
+        require(_is_number(friction_velocity) and friction_velocity > 0,
+                "vbd.friction_velocity", friction_velocity, "must be a speed > 0 m/s")
         self.settings = Settings(int(iterations), float(contact_stiffness_ratio),
                                  float(friction_velocity))
 
@@ -352,27 +353,12 @@ class VertexBlockDescent(Integrator):
         graph, layout = self.tables(model)
         if threaded is None:
             threaded = graph.particles.shape[0] >= THREADED_FROM
-        return KernelCall(parallel_advance if threaded else advance, (
+        return KernelCall(self.parallel_kernel if threaded else self.kernel, (
             model.arrays, graph, self.settings, layout,
             ImplicitState(state.positions, state.velocities, state.contacts), float(dt),
             int(steps), state.pairs))
-
-    def advance(self, model, state, dt, steps, threads=1):
-        call = self.kernel_call(model, state, dt, steps)
-        if call.kernel is parallel_advance:
-            numba.set_num_threads(threads)
-        model.arrays.clock[CALL_START] = state.time   # the steps take their times from it
-        done, particle, state.pairs = call.kernel(*call.arguments)
-        return int(done), int(particle)
 
     def variants(self, model, state, dt):
         return {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
                 "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
 
-
-def _positive(value) -> bool:
-    return (isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
-            and bool(np.isfinite(value)) and value > 0)
-
-
-__all__ = ["VertexBlockDescent", "VertexGraph"]
