@@ -36,17 +36,30 @@ setup_ticker() {
   done
 }
 
-if [ ! -x .venv/bin/springsim ] || [ ! -x .venv/bin/pytest ] || [ pyproject.toml -nt .venv/.installed ]; then
-  first_time=$([ -e .venv/.installed ] && echo no || echo yes)
+# springsim with what a run needs, then (install_the_rest) the optional parts (meshes, export,
+# the browser, sweeps, docs) and the test tools: run.sh sets VENV_REST=later and installs the
+# rest after its first run, so that the first result comes sooner; test.sh installs all now.
+if [ ! -x .venv/bin/springsim ] || [ pyproject.toml -nt .venv/.installed-core ]; then
+  first_time=$([ -e .venv/.installed-core ] && echo no || echo yes)
   setup_stage creating "creating the virtual environment .venv (first run only)" \
     python3 -m venv .venv
   setup_stage updating "updating pip in .venv" \
     .venv/bin/pip install --progress-bar off --upgrade pip
-  setup_stage installing "installing springsim and its dependencies into .venv (a few minutes, first run only)" \
-    .venv/bin/pip install --progress-bar off -e ".[all,test]"
-  touch .venv/.installed
+  setup_stage installing "installing springsim and what a run needs into .venv (about 30 s, first run only)" \
+    .venv/bin/pip install --progress-bar off -e .
+  touch .venv/.installed-core
   if [ "$first_time" = yes ]; then
-    setup_stage compiling "compiling the kernels of the default scene (springsim warmup --scene jelly-plane; about 3 minutes on two cores, first run only)" \
+    setup_stage compiling "compiling the kernels of the default scene on every core (springsim warmup --scene jelly-plane; about 2 minutes on two cores, first run only)" \
       .venv/bin/springsim warmup --scene jelly-plane
   fi
 fi
+
+install_the_rest() {
+  if [ ! -x .venv/bin/pytest ] || [ pyproject.toml -nt .venv/.installed ]; then
+    setup_stage installing "installing the optional parts (meshes, export, web, sweeps, docs) and the test tools into .venv (about a minute, first run only)" \
+      .venv/bin/pip install --progress-bar off -e ".[all,test]"
+    touch .venv/.installed
+  fi
+}
+
+[ "${VENV_REST:-now}" = later ] || install_the_rest

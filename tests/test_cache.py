@@ -154,3 +154,35 @@ def test_kernels_cached_by_different_processes_link_without_symbol_collisions(tm
     wrong (the control: if it stops failing, Numba has fixed numba#10486)."""
     assert sorted_in_three_processes(tmp_path / "numba", "numba") == ["True", "True", "False"]
     assert sorted_in_three_processes(tmp_path / "springsim", "springsim") == ["True"] * 3
+
+
+def test_two_processes_saving_one_kernels_signatures_at_once_keep_both(tmp_path, monkeypatch):
+    """Numba's cache save reads a kernel's index, takes the first free data file number, and
+    writes: two processes compiling one kernel for two signatures at once (warmup's parallel
+    compiles) both took number 1, and one signature's index entry named the other's code. Here
+    two savers (threads with their own lock descriptors, as processes have) read the index at
+    the same moment; each signature must come back with its own data."""
+    import threading
+    import time
+
+    from numba.core.caching import IndexDataCacheFile
+
+    import springsim._jit  # noqa: F401 - locks the cache's saves
+
+    unlocked_read = IndexDataCacheFile._load_index
+
+    def slow_read(cache_file):   # both savers read before either writes
+        overloads = unlocked_read(cache_file)
+        time.sleep(0.3)
+        return overloads
+
+    monkeypatch.setattr(IndexDataCacheFile, "_load_index", slow_read)
+    savers = [IndexDataCacheFile(str(tmp_path), "kernel-1", "stamp") for _ in range(2)]
+    threads = [threading.Thread(target=saver.save, args=(f"signature {n}", f"code {n}"))
+               for n, saver in enumerate(savers)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    reader = IndexDataCacheFile(str(tmp_path), "kernel-1", "stamp")
+    assert [reader.load(f"signature {n}") for n in range(2)] == ["code 0", "code 1"]

@@ -146,6 +146,40 @@ def test_warmup_lists_every_variant_of_each_method():
     assert {label.split()[1] for label in warmup.variant_calls("implicit_euler")} == {"serial"}
 
 
+def test_warmup_compiles_each_part_of_the_steps_once_the_costliest_first(monkeypatch):
+    """The kernels every serial step calls (Integrator.parts) are compiled before the steps,
+    each once however many integrators and scenes call it with the same types, the force
+    evaluation (the longest) first, then each scene's recording; the steps follow, one task
+    per integrator with every scene."""
+    monkeypatch.setattr(warmup, "is_compiled", lambda call: False)   # as on a clean machine
+    scenes = warmup.warmup_scenes()
+    tasks = warmup.part_tasks(["rk4", "midpoint", "implicit_euler"], scenes)
+    kernels = [task.parts for task in tasks]
+    assert kernels[0] == ("accelerations",)
+    assert sorted(kernels[:7]) == sorted((name,) for name in (
+        "accelerations", "force_columns", "pairs_now", "collide", "start_step", "step_start",
+        "copy_positions"))
+    assert kernels[7:] == [(warmup.RECORDING,)] * 2   # the scenes' models share their types
+    assert [task.scenes for task in tasks[7:]] == [(scene,) for scene in scenes]
+    steps = warmup.step_tasks(["rk4", "implicit_euler"], scenes, None)
+    assert [task.integrator for task in steps] == ["implicit_euler", "rk4"]
+    assert all(task.scenes == tuple(scenes) and task.variants is None for task in steps)
+
+
+def test_the_steps_load_the_parts_warmup_compiled_apart():
+    """The parts are compiled apart for the types the serial steps call them with: after
+    warmup (test.sh's, of every step), each part's cache holds the part's one signature. A
+    second one would be a step's own compile of it, the parallel work done twice."""
+    from springsim.simulation import Simulation
+
+    simulation = Simulation(warmup.warmup_scenes()[0], integrator="rk4")
+    calls = simulation.integrator.parts(simulation.model, simulation.state, simulation.dt)
+    for name, call in calls.items():
+        cache = call.kernel._cache
+        signatures = [key[0] for key in cache._cache_file._load_index()]
+        assert signatures == [warmup._types(call)], name
+
+
 @pytest.mark.slow   # explicit Euler's threaded step: minutes to compile where it is not cached
 def test_warmup_compiles_the_threaded_variant_so_a_threaded_step_compiles_nothing(capsys):
     """After `springsim warmup --variants threaded` (test.sh runs it first, for the thread tests:
@@ -158,7 +192,8 @@ def test_warmup_compiles_the_threaded_variant_so_a_threaded_step_compiles_nothin
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("springsim warmup: compiling the threaded variant of the kernels "
                              "of 1 integrator once")
-    assert out[1].split()[0] == "explicit_euler" and out[1].endswith(" s")
+    timings = [line.split() for line in out[1:] if not line.startswith("  compiled ")]
+    assert [line[0] for line in timings] == ["the", "explicit_euler"]
     assert warmup.is_warm("explicit_euler", ["threaded"])
     simulation = Simulation(load_scene("jelly-plane", ["bodies.0.particles_per_edge=3"]),
                             integrator="explicit_euler")
@@ -292,7 +327,7 @@ def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
                                               "setup: ... still installing, 2 s"], lines
     lines = [line for line in lines if not line.startswith("setup: ... still ")]
     assert [line.split()[1] for line in lines if line.startswith("RAN")] == [
-        "python3", "pip", "pip", "springsim"]
+        "python3", "pip", "pip", "springsim", "pip"]
     for index, line in enumerate(lines):
         if line.startswith("RAN"):
             assert lines[index - 1].startswith("setup: "), lines

@@ -33,8 +33,18 @@ checks, and by default gives up beyond 8 of them (``runtime-memory-check-thresho
 over springs that writes nine results (the adjoint's, gradients/run_kernels.py) compiled to
 scalar code. ``allow_memory_checks`` raises the limits at import, before any kernel compiles;
 the checks change no result (a loop's iterations do the same arithmetic, in lanes).
+
+Numba's cache keeps, per kernel, an index of its compiled signatures and a numbered data file
+each. Saving one reads the index, takes the first free number, writes the index, then the
+data: two processes compiling one kernel for two signatures at once (`springsim warmup`'s
+parallel compiles, pytest's workers) can take the same number, and one index entry then names
+the other signature's code, which a later run would load and call. ``locked_cache_saves`` makes
+each save one step under a lock file in the cache folder, the data written before the index
+that names it (tests/test_cache.py).
 """
 import ast
+import contextlib
+import fcntl
 import hashlib
 import itertools
 import os
@@ -48,6 +58,7 @@ import llvmlite.binding as llvm
 import numba
 from numba import njit
 from numba.core.bytecode import FunctionIdentity
+from numba.core.caching import IndexDataCacheFile
 
 FASTMATH = False   # strict IEEE arithmetic: the same bits however compiled (module doc)
 MEMORY_CHECKS = 256   # runtime alias checks a vectorized loop may take (module doc)
@@ -152,8 +163,37 @@ def allow_memory_checks() -> None:
     llvm.set_option("", f"--vectorize-memory-check-threshold={MEMORY_CHECKS}")
 
 
+def locked_cache_saves() -> None:
+    """Numba's cache saves, one process at a time, data before index (module doc)."""
+    IndexDataCacheFile.save = _locked_save
+
+
+def _locked_save(cache_file, key, data) -> None:
+    with _cache_lock(cache_file._cache_path):
+        overloads = cache_file._load_index()
+        data_name = overloads.get(key)
+        if data_name is None:
+            taken = set(overloads.values())
+            data_name = next(name for number in itertools.count(1)
+                             if (name := cache_file._data_name(number)) not in taken)
+        cache_file._save_data(data_name, data)
+        overloads[key] = data_name
+        cache_file._save_index(overloads)
+
+
+@contextlib.contextmanager
+def _cache_lock(folder: str):
+    with open(os.path.join(folder, "springsim-saves.lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
 distinct_function_ids()
 allow_memory_checks()
+locked_cache_saves()
 _use_versioned_cache()
 
 

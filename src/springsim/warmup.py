@@ -9,6 +9,7 @@ integrator is. A compile that does happen is said when it starts (compile_notice
 """
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 
 def cache_folder() -> Path:
@@ -23,7 +24,7 @@ def is_compiled(call) -> bool:
     """Whether ``call``'s kernel (an integrators.KernelCall) is compiled for its arguments'
     types: in this process, or in the cache on disk (then loading it takes a second)."""
     kernel = call.kernel
-    types = tuple(kernel.typeof_pyval(argument) for argument in call.arguments)
+    types = _types(call)
     if types in kernel.overloads:
         return True
     try:   # Numba's cache index, as its own load_overload reads it
@@ -65,3 +66,132 @@ def is_warm(integrator: str, variants=None) -> bool:
     """Whether every variant `springsim warmup` compiles for ``integrator`` (or those named in
     ``variants``) is in the cache."""
     return all(map(is_compiled, variant_calls(integrator, variants).values()))
+
+
+# --- compiling in parallel -------------------------------------------------------------------
+# A step kernel compiles the kernels it calls first, each on its own (the serial steps'
+# collide, accelerations, pairs_now: Integrator.parts), and later compiles load them from the
+# cache. So `springsim warmup` compiles in two stages, each spread over the machine's cores in
+# worker processes: the parts first (every integrator's serial step calls the same ones), then
+# the steps, which load the parts. Numba compiles in one thread, so a process per core is what
+# two cores give: the default scene's first compile in about half the time.
+
+RECORDING = "recording"   # the part that compiles the kernels a run's recording calls
+TICK = 15.0               # s: at most this long without a line while workers compile
+
+
+class CompileTask(NamedTuple):
+    """One worker's share of a warmup, under ``integrator``: the step's ``parts`` named
+    (Integrator.parts, and RECORDING) for the first of ``scenes``, or, where there are none,
+    for each scene the step a run calls and the ``variants`` named (None: every one)."""
+
+    scenes: tuple
+    integrator: str
+    parts: tuple = ()
+    variants: tuple | None = ()
+
+    def label(self) -> str:
+        what = ", ".join(self.parts) if self.parts else "step"
+        return f"{self.integrator} {what} ({', '.join(scene.name for scene in self.scenes)})"
+
+
+def compile_jobs() -> int:
+    """How many processes compile at once: one per core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:   # no affinity on this platform
+        return max(1, os.cpu_count() or 1)
+
+
+def part_tasks(integrators, scenes) -> list[CompileTask]:
+    """A task for each part not yet compiled (once, however many steps call it), in the
+    integrators' order of parts (the costliest first, so that a pool taking them in turn ends
+    them together), then each scene's recording."""
+    from .simulation import Simulation
+
+    parts, seen = [], set()
+    for scene in scenes:
+        for integrator in integrators:
+            simulation = Simulation(scene, integrator=integrator, threads=1)
+            calls = simulation.integrator.parts(simulation.model, simulation.state,
+                                                simulation.dt)
+            for name, call in calls.items():
+                key = (call.kernel, _types(call))
+                if key not in seen and not is_compiled(call):
+                    seen.add(key)
+                    parts.append(CompileTask((scene,), integrator, (name,)))
+    return parts + [CompileTask((scene,), integrators[0], (RECORDING,)) for scene in scenes]
+
+
+def step_tasks(integrators, scenes, variants) -> list[CompileTask]:
+    """A task for each integrator's steps on every scene (one process: a second scene's step
+    mostly loads what the first compiled), those with the fewest parts first: they compile
+    the most of their own."""
+    from .simulation import Simulation
+
+    def part_count(integrator):
+        simulation = Simulation(scenes[0], integrator=integrator, threads=1)
+        return len(simulation.integrator.parts(simulation.model, simulation.state,
+                                               simulation.dt))
+
+    return [CompileTask(tuple(scenes), integrator, (), variants)
+            for integrator in sorted(integrators, key=part_count)]
+
+
+def run_task(task: CompileTask) -> float:
+    """Compile (or load) what ``task`` names; the seconds it took."""
+    import time
+
+    from .compile_notice import announced
+    from .recording import Recording
+    from .simulation import Simulation
+
+    started = time.perf_counter()
+    with announced(task.label(), say=False):
+        for scene in task.scenes[:1] if task.parts else task.scenes:
+            simulation = Simulation(scene, integrator=task.integrator, threads=1)
+            model, state, dt = simulation.model, simulation.state, simulation.dt
+            calls = simulation.integrator.parts(model, state, dt)
+            for name in task.parts:
+                if name == RECORDING:
+                    Recording.empty(simulation, 1, 60.0).capture(0, simulation)
+                else:
+                    calls[name].kernel.compile(_types(calls[name]))
+            if task.parts:
+                continue
+            simulation.step(0)   # a call of no steps compiles the whole step, running none
+            for variant, call in simulation.integrator.variants(model, state, dt).items():
+                if (task.variants is None or variant in task.variants) and not is_compiled(call):
+                    call.kernel.compile(_types(call))
+    return time.perf_counter() - started
+
+
+def run_tasks(tasks: list, jobs: int, say=print) -> list:
+    """Run ``tasks`` on ``jobs`` worker processes (here, one after another, where one job or
+    one task); [(task, seconds)] as they ended. While workers compile, a line at least every
+    TICK seconds."""
+    import concurrent.futures
+    import multiprocessing
+    import time
+
+    if jobs <= 1 or len(tasks) <= 1:
+        return [(task, run_task(task)) for task in tasks]
+    started, ended = time.monotonic(), []
+    context = multiprocessing.get_context("spawn")   # a fresh interpreter: no Numba state shared
+    with concurrent.futures.ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=context) as pool:
+        running = {pool.submit(run_task, task): task for task in tasks}
+        while running:
+            done, _ = concurrent.futures.wait(running, timeout=TICK,
+                                              return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in done:
+                task = running.pop(future)
+                ended.append((task, future.result()))
+                say(f"  compiled {task.label()} in {ended[-1][1]:.1f} s")
+            if not done:
+                say(f"  ... still compiling ({len(running)} to go), "
+                    f"{time.monotonic() - started:.0f} s")
+    return ended
+
+
+def _types(call) -> tuple:
+    return tuple(call.kernel.typeof_pyval(argument) for argument in call.arguments)

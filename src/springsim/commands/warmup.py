@@ -1,7 +1,5 @@
 """`springsim warmup`: compile every variant of every integrator's kernels now, once, instead of
 at first use."""
-import time
-
 NAME = "warmup"
 VARIANTS = ("serial", "threaded", "keeping")   # Integrator.variants' names
 HELP = ("compile (or load) the kernels of every integrator now, serial, threaded and the "
@@ -20,6 +18,8 @@ def add_arguments(parser) -> None:
                         help="compile only what a run of this scene takes (its integrator's "
                              "step for its model, with --integrators for another), not every "
                              "variant")
+    parser.add_argument("--jobs", type=int, metavar="N",
+                        help="processes that compile at once (default: one per core)")
 
 
 def run(args) -> int:
@@ -33,6 +33,8 @@ def run(args) -> int:
     for variant in args.variants or ():
         require(variant in VARIANTS, "--variants", variant,
                 "must be one of " + ", ".join(VARIANTS))
+    require(args.jobs is None or args.jobs >= 1, "--jobs", args.jobs,
+            "must be a whole number >= 1")
     require(args.scene is None or args.variants is None, "--variants", args.variants,
             "goes without --scene (a scene's run takes the variant its model needs)")
     if args.scene is not None:
@@ -50,49 +52,27 @@ def run(args) -> int:
                 f"{'s' if len(names) != 1 else ''}")
     print(f"springsim warmup: compiling {what} once (minutes on the first install; seconds "
           "when they are cached)", flush=True)
-    warm(names, say=lambda line: print(line, flush=True), scene=scene, variants=args.variants)
+    warm(names, say=lambda line: print(line, flush=True), scene=scene, variants=args.variants,
+         jobs=args.jobs)
     return 0
 
 
-def warm(integrators, say=print, scene=None, variants=None) -> list:
-    """Compile (or load) every kernel each integrator's runs use: a call of no steps on each
-    warmup scene (warmup.warmup_scenes: the model's, the step's and the recording's kernels),
-    then each variant of the step (serial, threaded, keeping the tape: Integrator.variants) not
-    yet compiled (those named in ``variants``), by its arguments' types, without running it.
-    With ``scene``, that scene's call alone. (integrator, seconds) for each."""
-    from ..compile_notice import announced
-    from ..warmup import is_compiled, warmup_scenes
+def warm(integrators, say=print, scene=None, variants=None, jobs=None) -> list:
+    """Compile (or load) every kernel each integrator's runs use, on ``jobs`` processes (one
+    per core by default; warmup.py): the parts every step calls, then each integrator's step
+    on each warmup scene (warmup.warmup_scenes: the model's, the step's and the recording's
+    kernels) with each variant of it (serial, threaded, keeping the tape:
+    Integrator.variants) not yet compiled (those named in ``variants``). With ``scene``, what
+    that scene's run calls alone. (integrator, seconds) for each, the parts first."""
+    from ..warmup import compile_jobs, part_tasks, run_tasks, step_tasks, warmup_scenes
 
     scenes = warmup_scenes() if scene is None else [scene]
-    timings = []
-    for integrator in integrators:
-        started = time.perf_counter()
-        with announced(f"the {integrator} kernels", say=False):
-            for each in scenes:
-                simulation = _stepped(each, integrator)
-                if scene is None:
-                    found = simulation.integrator.variants(
-                        simulation.model, simulation.state, simulation.dt)
-                    for variant, call in found.items():
-                        if (variants is None or variant in variants) and not is_compiled(call):
-                            call.kernel.compile(_types(call))
-        timings.append((integrator, time.perf_counter() - started))
-        say(f"  {integrator:<20}{timings[-1][1]:.1f} s")
+    jobs = compile_jobs() if jobs is None else jobs
+    parts = run_tasks(part_tasks(integrators, scenes), jobs, say)
+    steps = run_tasks(step_tasks(integrators, scenes, () if scene is not None else variants),
+                      jobs, say)
+    timings = [("the steps' parts", sum(seconds for _, seconds in parts))]
+    timings += [(task.integrator, seconds) for task, seconds in steps]
+    for name, seconds in timings:
+        say(f"  {name:<20}{seconds:.1f} s")
     return timings
-
-
-def _stepped(scene, integrator):
-    """A simulation of ``scene`` that has compiled (or loaded) its step kernel and those a
-    run's recording calls (energies, penetration): a call of no steps compiles the whole step
-    kernel, without running it."""
-    from ..recording import Recording
-    from ..simulation import Simulation
-
-    simulation = Simulation(scene, integrator=integrator)
-    simulation.step(0)
-    Recording.empty(simulation, 1, 60.0).capture(0, simulation)
-    return simulation
-
-
-def _types(call) -> tuple:
-    return tuple(call.kernel.typeof_pyval(argument) for argument in call.arguments)

@@ -41,8 +41,9 @@ from ..attachments import hold_attachments
 from ..collision.pair_lists.keeping import pairs_at, start_surface_pairs
 from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
-from ..forces import force_columns, threaded_accelerations
+from ..forces import accelerations, force_columns, threaded_accelerations
 from ..world import move_world, place_pins, start_step, step_end
+from .base import KernelCall
 
 
 class Motion(NamedTuple):
@@ -201,3 +202,26 @@ def threaded(function, **twins):
 
 
 threaded_drive = threaded(drive)
+
+
+def drive_parts(model, state, dt) -> dict:
+    """{name: KernelCall} of the kernels ``drive`` calls as kernels of their own, with the
+    argument types the serial step calls them with: each compiles (and caches) apart from the
+    step, so that `springsim warmup` can compile them in parallel before the step, which then
+    loads them (warmup.py)."""
+    arrays, x, v, pairs = model.arrays, state.positions, state.velocities, state.pairs
+    start = np.empty_like(x)
+    return {"pairs_now": KernelCall(pairs_now, (arrays, x, pairs)),
+            "collide": KernelCall(collide, (arrays, x, v, start, pairs, float(dt))),
+            "start_step": KernelCall(start_step, (arrays, x, v, 0, float(dt))),
+            "step_start": KernelCall(step_start, (arrays, x)),
+            "copy_positions": KernelCall(copy_positions, (start, x))}
+
+
+def force_parts(model, state, dt) -> dict:
+    """The explicit methods' force evaluation (``accelerations``), as ``drive_parts``."""
+    x = state.positions
+    a = np.empty_like(x)
+    return {"accelerations": KernelCall(accelerations, (
+                model.arrays, x, state.velocities, float(dt), a, force_columns.py_func(x))),
+            "force_columns": KernelCall(force_columns, (x,))}

@@ -55,6 +55,13 @@ class Integrator:
         and ``warmup.is_warm`` checks; none for a method that is not one compiled call."""
         return {}
 
+    def parts(self, model, state, dt: float) -> dict[str, KernelCall]:
+        """The kernels the serial step calls as kernels of their own, by name, with the
+        arguments it calls them with: `springsim warmup` compiles them first, in parallel,
+        and the step's compile then loads them (warmup.py). None for a method that is not
+        one compiled call."""
+        return {}
+
     def model_cache(self, model) -> dict:
         """What this integrator derives from ``model`` and keeps between calls (a solve's
         layout); a new model (a Simulation rebuilt by an edit) starts with nothing."""
@@ -124,6 +131,11 @@ class KernelIntegrator(Integrator):
                                                  np.empty((1, self.stages, particles, 3)),
                                                  np.empty((1, 2, particles, 3)))
         return calls
+
+    def parts(self, model, state, dt):
+        from ._steps import drive_parts, force_parts   # _steps imports this module
+
+        return {**force_parts(model, state, dt), **drive_parts(model, state, dt)}
 
     def advance(self, model, state, dt, steps, threads=1):
         call = self.kernel_call(model, state, dt, steps)

@@ -58,7 +58,7 @@ from ..state import ContactMemory
 from ..terms import add_external_jacobians, add_step_end_forces
 from ..world import aim_pins, move_world, step_end, step_time
 from .base import Integrator, KernelCall, register
-from ._steps import add_scaled, copy_positions, drive
+from ._steps import add_scaled, copy_positions, drive, drive_parts
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
 
@@ -467,6 +467,9 @@ class ImplicitEuler(Integrator):
     def variants(self, model, state, dt):
         # one kernel: no threaded twin, and both preconditioners' layouts have the same types
         return {"serial": self.kernel_call(model, state, dt, 0)}
+
+    def parts(self, model, state, dt):
+        return drive_parts(model, state, dt)
 
 
 def _solve_pairs(state):

@@ -35,7 +35,7 @@ from ..vbd.graph import vertex_graph
 from ..vbd.vertex import added, solve_block, spring_share
 from ..world import aim_pins, move_world, step_end, surface_velocity, terrain_at, terrain_view
 from .base import KernelCall, KernelIntegrator, register
-from ._steps import drive, threaded, threaded_drive
+from ._steps import drive, drive_parts, threaded, threaded_drive
 from .implicit_euler import ImplicitState, _is_number, _is_whole
 
 
@@ -361,4 +361,7 @@ class VertexBlockDescent(KernelIntegrator):
     def variants(self, model, state, dt):
         return {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
                 "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
+
+    def parts(self, model, state, dt):
+        return drive_parts(model, state, dt)   # no accelerations: its blocks are its own
 
