@@ -37,10 +37,10 @@ fi
 threaded="explicit_euler vbd"
 if ! .venv/bin/python -c "import sys; from springsim.warmup import is_warm; \
 from springsim.integrators import integrator_names; \
-sys.exit(0 if all(is_warm(name, ['serial', 'keeping']) for name in integrator_names()) \
+sys.exit(0 if all(is_warm(name, ['serial', 'plain', 'keeping']) for name in integrator_names()) \
          and all(is_warm(name, ['threaded']) for name in sys.argv[1:]) else 1)" $threaded; then
     setup_stage compiling "compiling the kernels the tests call (springsim warmup; first run only)" \
-        .venv/bin/springsim warmup --variants serial keeping
+        .venv/bin/springsim warmup --variants serial plain keeping
     [ -z "$threaded" ] || setup_stage compiling \
         "compiling the threaded steps of $threaded for the thread tests (first run only)" \
         .venv/bin/springsim warmup --integrators $threaded --variants threaded

@@ -52,13 +52,15 @@ import re
 import secrets
 import shutil
 import time
+import types
 from pathlib import Path
 
 import llvmlite.binding as llvm
 import numba
 from numba import njit
 from numba.core.bytecode import FunctionIdentity
-from numba.core.caching import IndexDataCacheFile
+from numba.core.caching import IndexDataCacheFile, NullCache
+from numba.core.registry import CPUDispatcher as Dispatcher
 
 FASTMATH = False   # strict IEEE arithmetic: the same bits however compiled (module doc)
 MEMORY_CHECKS = 256   # runtime alias checks a vectorized loop may take (module doc)
@@ -204,6 +206,46 @@ def kernel(function):
     handed to a kernel like this one, the pair computed right when compiled in the process and
     wrong when loaded from the cache (tests/test_cache.py caught it; once it crashed)."""
     return njit(cache=True, fastmath=FASTMATH, error_model="numpy")(function)
+
+
+def twin(dispatcher, replacements: dict, suffix: str, made: dict):
+    """``dispatcher`` (a kernel or an inline kernel) with every kernel it calls that is a key of
+    ``replacements`` replaced by its value, wherever it is called: in its own code, or in any
+    kernel it calls, which is then a twin too (made once: ``made``, by id). A kernel that
+    reaches none is itself. Each twin is the same code compiled with other globals (Numba
+    resolves a function's globals when it compiles it), under its own name (``suffix``) and so
+    its own cache entry."""
+    if id(dispatcher) in made:
+        return made[id(dispatcher)]
+    made[id(dispatcher)] = dispatcher   # until known otherwise (a kernel calls itself: none do)
+    python = dispatcher.py_func
+    found = {}
+    for name in _global_names(python.__code__):
+        called = python.__globals__.get(name)
+        if not isinstance(called, Dispatcher):
+            continue
+        if called in replacements:
+            found[name] = replacements[called]
+        elif (made_twin := twin(called, replacements, suffix, made)) is not called:
+            found[name] = made_twin
+    if found:
+        copy = types.FunctionType(python.__code__, {**python.__globals__, **found},
+                                  python.__name__, python.__defaults__, python.__closure__)
+        copy.__qualname__ = python.__qualname__ + suffix
+        options = {key: value for key, value in dispatcher.targetoptions.items()
+                   if key != "nopython"}
+        made[id(dispatcher)] = njit(cache=not isinstance(dispatcher._cache, NullCache),
+                                    **options)(copy)
+    return made[id(dispatcher)]
+
+
+def _global_names(code) -> set:
+    """The names ``code`` (with the functions defined in it) may read as globals."""
+    names = set(code.co_names)
+    for constant in code.co_consts:
+        if isinstance(constant, types.CodeType):
+            names |= _global_names(constant)
+    return names
 
 
 def inline_kernel(function):

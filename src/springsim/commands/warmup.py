@@ -1,7 +1,7 @@
 """`springsim warmup`: compile every variant of every integrator's kernels now, once, instead of
 at first use."""
 NAME = "warmup"
-VARIANTS = ("serial", "threaded", "keeping")   # Integrator.variants' names
+VARIANTS = ("serial", "plain", "threaded", "keeping")   # Integrator.variants' names
 HELP = ("compile (or load) the kernels of every integrator now, serial, threaded and the "
         "gradient's, so that later runs start in seconds (./run.sh and ./test.sh run it the "
         "first time)")
@@ -11,9 +11,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--integrators", nargs="+", metavar="NAME",
                         help="integrators to compile (default: all)")
     parser.add_argument("--variants", nargs="+", metavar="VARIANT",
-                        help="the variants to compile: serial, threaded (models of 131,072 "
-                             "particles and more), keeping (the gradient's tape) (default: "
-                             "all)")
+                        help="the variants to compile: serial, plain (the serial step of a "
+                             "model with no body contact, balls, pins, attachments, terms or "
+                             "mesh terrains), threaded (models of 131,072 particles and more), "
+                             "keeping (the gradient's tape) (default: all)")
     parser.add_argument("--scene", metavar="SCENE",
                         help="compile only what a run of this scene takes (its integrator's "
                              "step for its model, with --integrators for another), not every "

@@ -106,13 +106,20 @@ class KernelIntegrator(Integrator):
         done, particle, state.pairs = call.kernel(*call.arguments)
         return int(done), int(particle)
 
+    def serial_kernel(self, model):
+        """``kernel``, or its plain twin for a plain model (plain.py: the same steps, compiled
+        without what the model does not have)."""
+        from ..plain import is_plain, plain_twin
+
+        return plain_twin(self.kernel) if is_plain(model.arrays) else self.kernel
+
     def kernel_call(self, model, state, dt, steps, threaded=None) -> KernelCall:
         """The call ``advance`` makes: ``parallel_kernel`` where ``threaded`` (by default, where
-        the model's size asks for it), else ``kernel``."""
+        the model's size asks for it), else the serial kernel (``serial_kernel``)."""
         if threaded is None:
             threaded = partition_count(model.particle_count,
                                        model.arrays.spring_partition) > 1
-        return KernelCall(self.parallel_kernel if threaded else self.kernel,
+        return KernelCall(self.parallel_kernel if threaded else self.serial_kernel(model),
                           (model.arrays, state.positions, state.velocities, float(dt),
                            int(steps), state.pairs))
 
@@ -122,7 +129,11 @@ class KernelIntegrator(Integrator):
                            len(kept), state.pairs, kept, starts))
 
     def variants(self, model, state, dt):
-        calls = {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
+        from ..plain import plain_twin
+
+        serial = self.kernel_call(model, state, dt, 0, threaded=False)
+        calls = {"serial": serial._replace(kernel=self.kernel),
+                 "plain": serial._replace(kernel=plain_twin(self.kernel)),
                  "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
         if self.keeping_kernel is not None:
             # the tape's arrays for one step (gradients/tape.py), empty: only their types count
@@ -133,9 +144,11 @@ class KernelIntegrator(Integrator):
         return calls
 
     def parts(self, model, state, dt):
+        from ..plain import plain_parts
         from ._steps import drive_parts, force_parts   # _steps imports this module
 
-        return {**force_parts(model, state, dt), **drive_parts(model, state, dt)}
+        calls = {**force_parts(model, state, dt), **drive_parts(model, state, dt)}
+        return plain_parts(calls, model)
 
     def advance(self, model, state, dt, steps, threads=1):
         call = self.kernel_call(model, state, dt, steps)

@@ -353,15 +353,14 @@ class VertexBlockDescent(KernelIntegrator):
         graph, layout = self.tables(model)
         if threaded is None:
             threaded = graph.particles.shape[0] >= THREADED_FROM
-        return KernelCall(self.parallel_kernel if threaded else self.kernel, (
+        return KernelCall(self.parallel_kernel if threaded else self.serial_kernel(model), (
             model.arrays, graph, self.settings, layout,
             ImplicitState(state.positions, state.velocities, state.contacts), float(dt),
             int(steps), state.pairs))
 
-    def variants(self, model, state, dt):
-        return {"serial": self.kernel_call(model, state, dt, 0, threaded=False),
-                "threaded": self.kernel_call(model, state, dt, 0, threaded=True)}
-
     def parts(self, model, state, dt):
-        return drive_parts(model, state, dt)   # no accelerations: its blocks are its own
+        from ..plain import plain_parts
+
+        # no accelerations: its blocks are its own
+        return plain_parts(drive_parts(model, state, dt), model)
 

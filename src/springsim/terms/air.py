@@ -3,7 +3,7 @@
 Euler its force at the estimate comes with its Jacobian, in one pass over the triangles. Its
 parameters are the model's wind arrays (the scene's ``[wind]``): no table of its own."""
 from .._jit import inline_kernel
-from ..wind import add_wind_forces, add_wind_with_jacobian
+from ..wind import ON, add_wind_forces, add_wind_with_jacobian
 from .base import Term, register
 
 
@@ -24,3 +24,7 @@ class Air(Term):
     add_jacobian = wind_jacobian
     adjoint = "springsim.gradients.wind:WindAdjoint"
     order = 30
+
+    @classmethod
+    def used(cls, arrays) -> bool:
+        return arrays.wind_settings[ON] != 0.0

@@ -16,6 +16,8 @@ adding into an output; a part a term lacks is None and is left out of the loop:
   implicit/pattern.py's ``layout``), and in the ``first`` iteration its h^2 dF/dx v in ``rhs``;
 - ``adjoint``: "module:Class" of its adjoint term (gradients/terms.py), which the gradients
   import when a run is differentiated;
+- ``used(arrays)``: whether a model has any of it (the plain kernels leave the terms out:
+  plain.py);
 - ``order``: where it stands in the loops (the order its forces are summed in);
 - ``scene_type`` and ``settings``: the ``type`` name and dataclass of the tables a scene file's
   ``[[forces]]`` list holds for it (none for the forces that have scene keys of their own), and
@@ -48,6 +50,13 @@ class Term:
     def pack(cls, scene, built, offsets) -> tuple:
         """Its table; the forces with model arrays of their own have none."""
         return ()
+
+    @classmethod
+    def used(cls, arrays) -> bool:
+        """Whether the model (its ModelArrays) has any of this force: the plain kernels,
+        compiled without the terms, serve only models that use none (plain.py). By default,
+        whether its table has a row; the forces with model arrays of their own say it."""
+        return any(len(column) > 0 for column in arrays.term_tables[cls.slot])
 
 
 def register(cls):

@@ -25,3 +25,7 @@ class SoftAttachments(Term):
     add_jacobian = attachment_jacobian
     adjoint = "springsim.gradients.attachments:SoftAttachmentsAdjoint"
     order = 20
+
+    @classmethod
+    def used(cls, arrays) -> bool:
+        return arrays.attachment_nodes.shape[0] > 0

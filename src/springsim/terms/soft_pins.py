@@ -24,3 +24,7 @@ class SoftPins(Term):
     add_jacobian = pin_jacobian
     adjoint = "springsim.gradients.pins:SoftPinsAdjoint"
     order = 10
+
+    @classmethod
+    def used(cls, arrays) -> bool:
+        return bool((arrays.pin_stiffness > 0.0).any())

@@ -53,16 +53,20 @@ def out_of_reach(row, data, x0, x1, x2):
     return np.inf, 0.0, 1.0, 0.0
 
 
-def kind_kernel(cls, still_only):
+def kind_kernel(cls, still_only, short_only=False):
     if still_only and getattr(cls, "never_still", False):
+        return out_of_reach
+    if short_only and getattr(cls, "look_ahead", False):
         return out_of_reach
     return inlined(cls.distance_kernel)
 
 
-def build_dispatcher(kinds, still_only=False):
+def build_dispatcher(kinds, still_only=False, short_only=False):
     """The dispatcher over ``kinds``; with ``still_only``, the kinds that deform by themselves
     (``never_still = True``) answer out_of_reach, for the lookups of terrains known not to
-    deform (still, or moving rigidly in world.terrain_at)."""
+    deform (still, or moving rigidly in world.terrain_at); with ``short_only``, so do the
+    kinds whose lookup is long (``look_ahead``: the meshes), for the plain kernels of the models
+    that have none (plain.py), which compile in a fraction of the time."""
     source = dispatcher_source(len(kinds))
     # Every kind's kernel is inlined into the dispatcher, and the dispatcher into its callers, at
     # Numba's level (inline="always"): then no call is left in the contact loops, and Numba drops
@@ -70,7 +74,7 @@ def build_dispatcher(kinds, still_only=False):
     # too big for LLVM to inline) kept it, and made the plane's contact four times slower. The
     # deforming mesh's kernel, inlined, still made the plane's lookup ten times slower (LLVM no
     # longer takes the kind's branch out of the particle loop): hence the still dispatcher.
-    namespace = {f"kernel_{number}": kind_kernel(cls, still_only)
+    namespace = {f"kernel_{number}": kind_kernel(cls, still_only, short_only)
                  for number, cls in enumerate(kinds)}
     # registered with linecache so that tracebacks and Numba's error messages can show it
     linecache.cache[FILENAME] = (len(source), None, source.splitlines(True), FILENAME)
@@ -96,4 +100,5 @@ def build_looks_ahead(kinds):
 
 terrain_distance = build_dispatcher(KINDS)
 still_terrain_distance = build_dispatcher(KINDS, still_only=True)
+short_terrain_distance = build_dispatcher(KINDS, still_only=True, short_only=True)
 terrain_looks_ahead = build_looks_ahead(KINDS)
