@@ -2,6 +2,7 @@
 as the whole kernel runs it, and a model with any of it runs the whole kernel."""
 import hashlib
 
+import numpy as np
 import pytest
 
 from springsim import plain
@@ -75,3 +76,17 @@ def test_the_serial_steps_share_one_twin_of_each_kernel_they_share():
     assert plain.plain_twin(_steps.force_columns) is _steps.force_columns
     forces = plain.plain_twin(rk4.rk4_step).py_func.__globals__["accelerations"]
     assert forces is plain.plain_twin(midpoint.midpoint_step).py_func.__globals__["accelerations"]
+
+
+def test_a_plain_models_penetration_is_measured_as_by_the_whole_kernel():
+    """The recording's clearance from each terrain (world.terrain_clearance) uses the plain twin
+    for a plain model: the same numbers, bit for bit."""
+    from springsim.world import terrain_clearance, terrain_clearances
+
+    simulation = Simulation(load_scene("jelly-bowl", SMALL), integrator="rk4")
+    simulation.step(2000)   # in the bowl by then
+    model, x = simulation.model, simulation.positions
+    plain_clearance = terrain_clearance(model, x, simulation.time)
+    whole = np.full(1, np.inf)
+    terrain_clearances(model.arrays, x, model.arrays.radius, simulation.time, whole)
+    assert plain_clearance.tobytes() == whole.tobytes() and plain_clearance[0] < 0.05
