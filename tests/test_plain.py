@@ -79,9 +79,10 @@ def test_the_serial_steps_share_one_twin_of_each_kernel_they_share():
 
 
 def test_a_plain_models_penetration_is_measured_as_by_the_whole_kernel():
-    """The recording's clearance from each terrain (world.terrain_clearance) uses the plain twin
+    """The recording's clearance from each terrain (clearance.terrain_clearance) uses the plain twin
     for a plain model: the same numbers, bit for bit."""
-    from springsim.world import terrain_clearance, terrain_clearances
+    from springsim.clearance import terrain_clearance
+    from springsim.world import terrain_clearances
 
     simulation = Simulation(load_scene("jelly-bowl", SMALL), integrator="rk4")
     simulation.step(2000)   # in the bowl by then

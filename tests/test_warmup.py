@@ -138,29 +138,34 @@ def test_is_compiled_reads_numbas_cache_on_disk(tmp_path):
 def test_warmup_lists_every_variant_of_each_method():
     """The threaded kernel and the gradient's are compiled by warmup, not only the serial."""
     from springsim.integrators import rk4
+    from springsim.plain import plain_twin
 
     calls = warmup.variant_calls("rk4")
     kernels = {label.split()[1]: call.kernel for label, call in calls.items()}
-    assert kernels == {"serial": rk4.advance, "threaded": rk4.parallel_advance,
-                       "keeping": rk4.advance_keeping}
+    assert kernels == {"serial": rk4.advance, "plain": plain_twin(rk4.advance),
+                       "threaded": rk4.parallel_advance, "keeping": rk4.advance_keeping}
     assert {label.split()[1] for label in warmup.variant_calls("implicit_euler")} == {"serial"}
 
 
 def test_warmup_compiles_each_part_of_the_steps_once_the_costliest_first(monkeypatch):
     """The kernels every serial step calls (Integrator.parts) are compiled before the steps,
-    each once however many integrators and scenes call it with the same types, the force
-    evaluation (the longest) first, then each scene's recording; the steps follow, one task
-    per integrator with every scene."""
+    each once however many integrators and scenes call it with the same types (the plain
+    model's plain twins, the other's whole kernels), the force evaluation (the longest) first,
+    then each scene's recording; the steps follow, one task per integrator with every scene."""
     monkeypatch.setattr(warmup, "is_compiled", lambda call: False)   # as on a clean machine
-    scenes = warmup.warmup_scenes()
+    plain_scene, whole_scene = scenes = warmup.warmup_scenes()   # a cube, a cloth on balls
     tasks = warmup.part_tasks(["rk4", "midpoint", "implicit_euler"], scenes)
-    kernels = [task.parts for task in tasks]
-    assert kernels[0] == ("accelerations",)
-    assert sorted(kernels[:7]) == sorted((name,) for name in (
-        "accelerations", "force_columns", "pairs_now", "collide", "start_step", "step_start",
-        "copy_positions"))
-    assert kernels[7:] == [(warmup.RECORDING,)] * 2   # the scenes' models share their types
-    assert [task.scenes for task in tasks[7:]] == [(scene,) for scene in scenes]
+    parts = [(task.scenes[0].name, task.parts[0]) for task in tasks]
+    names = ["accelerations", "force_columns", "pairs_now", "collide", "start_step",
+             "step_start", "copy_positions"]
+    # the cube's plain parts (pairs_now is no kernel to compile there: kept, as force_columns
+    # and the copies, which have no twin), implicit_euler's whole ones (it has no plain step),
+    # then the cloth's whole force evaluation, which no step of the cube calls
+    assert parts[:7] == [(plain_scene.name, name) for name in names]
+    assert parts[7:10] == [(plain_scene.name, name) for name in ("pairs_now", "collide",
+                                                                 "start_step")]
+    assert parts[10:] == [(whole_scene.name, "accelerations")] + [
+        (scene.name, warmup.RECORDING) for scene in scenes]
     steps = warmup.step_tasks(["rk4", "implicit_euler"], scenes, None)
     assert [task.integrator for task in steps] == ["implicit_euler", "rk4"]
     assert all(task.scenes == tuple(scenes) and task.variants is None for task in steps)
@@ -215,8 +220,8 @@ def test_warmup_refuses_variants_with_a_scene_in_one_line(capsys):
 def test_warmup_refuses_an_unknown_variant_in_one_line(capsys):
     assert main(["warmup", "--variants", "fast"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["springsim warmup: --variants = 'fast': must be one of serial, threaded, "
-                   "keeping"]
+    assert err == ["springsim warmup: --variants = 'fast': must be one of serial, plain, "
+                   "threaded, keeping"]
 
 
 def test_a_run_says_it_compiles_before_the_first_step(tmp_path, capsys, monkeypatch):

@@ -15,7 +15,7 @@ from .recording_layout import LAYOUT_KEYS, layout_arrays
 from .safe_files import atomic_output
 from .sampling import frame_steps
 from .compile_notice import announced, kernels_of
-from .world import terrain_clearance
+from .clearance import terrain_clearance
 
 
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from .errors import SimulationDiverged, require
 from .simulation import Simulation
-from .world import terrain_clearance
+from .clearance import terrain_clearance
 
 SAMPLE_INTERVAL = 0.02   # s of simulated time between energy and penetration checks
 ENERGY_SLACK = 0.1       # allowed rise of the total energy, as a share of the energy scale

@@ -196,21 +196,6 @@ def terrain_clearances(model, x, radius, t, out):
         out[k] = least
 
 
-def terrain_clearance(model, x: np.ndarray, t: float) -> np.ndarray:
-    """(T,) the least signed distance (m) from any particle's surface (its contact radius) to
-    each terrain of ``model`` where that terrain is at time ``t`` (s): negative for a
-    particle inside. The world is left at t, where the next step moves it from anyway."""
-    from .plain import is_plain, plain_twin   # plain.py imports this module
-
-    out = np.full(len(model.terrains), np.inf)
-    if len(out):   # a scene without terrains compiles nothing for it
-        clearances = (plain_twin(terrain_clearances) if is_plain(model.arrays)
-                      else terrain_clearances)   # a plain model's: the short lookups alone
-        clearances(model.arrays, np.ascontiguousarray(x, dtype=float), model.arrays.radius,
-                   float(t), out)
-    return out
-
-
 @kernel
 def pin_target(model, q):
     """Where moving pin q's path is now (the pose last moved to), and its velocity there."""

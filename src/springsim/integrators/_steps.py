@@ -43,7 +43,7 @@ from ..collision.pipeline import resolve_contacts
 from ..collision.response.terrain import resolve_terrain_impacts
 from ..forces import accelerations, force_columns, threaded_accelerations
 from ..world import move_world, place_pins, start_step, step_end
-from .base import KernelCall
+from .calls import KernelCall
 
 
 class Motion(NamedTuple):

@@ -4,25 +4,15 @@ Adding an integrator is one new file in this package that defines an ``Integrato
 decorated with ``@register``, plus its import line in ``__init__.py``. The registry lives here,
 not in the package's ``__init__``, so that a method's file imports nothing that imports it back.
 """
-from typing import NamedTuple
-
 import numba
 import numpy as np
 
 from ..clock import CALL_START
 from ..errors import SceneError
 from ..spring_runs import partition_count
+from .calls import KernelCall
 
 REGISTRY: dict[str, type] = {}
-
-
-class KernelCall(NamedTuple):
-    """A compiled kernel and the arguments a step calls it with. What Numba compiles (and
-    caches) is the kernel for these arguments' types: a new kernel or new types compile anew
-    (warmup.is_compiled asks the cache)."""
-
-    kernel: object       # a Numba dispatcher
-    arguments: tuple
 
 
 class Integrator:
