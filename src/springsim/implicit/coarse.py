@@ -153,8 +153,8 @@ def add_filtered_block(band, row, column, filters, p, blocks, slot, q, sign, fre
     """A_c's rows 3 row.. and columns 3 column.. += sign S_p blocks[slot] S_q (``filters`` every
     particle's S: projectors), upper half only (the lower half comes as the transposed block).
     A free particle's S is I: skipped. Plain loops: numba hands a 3 x 3 matrix product to BLAS,
-    a microsecond a call. Whole arrays and indices, not the rows: each row taken out is a view,
-    with a reference count up and down at every call (a cloth's A_c took 9 ms, 100 x 100)."""
+    a microsecond a call. Whole arrays and indices, not rows: a row taken out is a view, with a
+    reference count up and down."""
     r0, c0 = 3 * row, 3 * column
     if c0 + 2 < r0:
         return
@@ -197,6 +197,10 @@ def coarse_matrix(coarse, pattern, blocks, terms, kind, normal):
             if aggregate[j] >= 0:
                 add_filtered_block(band, aggregate[i], aggregate[j], filters, i, blocks, slot, j,
                                    1.0, kind[i] == FREE, kind[j] == FREE)
+    # each spring checked here, and its inline calls handed whole arrays with nothing to return
+    # early from: so LLVM takes out the reference counts of the arrays they are handed (with the
+    # check in add_spring and rows as views, a spring counted 16; the 100 x 100 cloth's A_c took
+    # 9.0 ms to build instead of 1.8: CHANGELOG, issue 56)
     block = np.empty((1, 3, 3))
     for r in range(runs.shape[0]):
         first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
@@ -228,7 +232,7 @@ def spring_block_of(coefficients, k, block):
 @inline_kernel
 def add_spring(band, row, column, free_row, free_column, filters, a, b, block):
     """A spring's off-diagonal blocks -C (a, b) and (b, a) into A_c, C = block[0] (a hole of a
-    run: C = 0); row and column the aggregates of its particles a and b, both in one."""
+    run: C = 0); row and column: the aggregates of its particles a and b (both in one)."""
     add_filtered_block(band, row, column, filters, a, block, 0, b, -1.0, free_row, free_column)
     add_filtered_block(band, column, row, filters, b, block, 0, a, -1.0, free_column, free_row)
 
