@@ -149,10 +149,12 @@ def projectors(kind, normal):
 
 
 @inline_kernel
-def add_filtered_block(band, row, column, s_row, block, s_column, sign, free_row, free_column):
-    """A_c's rows 3 row.. and columns 3 column.. += sign S_row block S_column, upper half only
-    (the lower half comes as the transposed block). A free particle's S is I: skipped. Plain
-    loops: numba hands a 3 x 3 matrix product to BLAS, a microsecond a call."""
+def add_filtered_block(band, row, column, filters, p, blocks, slot, q, sign, free_row, free_column):
+    """A_c's rows 3 row.. and columns 3 column.. += sign S_p blocks[slot] S_q (``filters`` every
+    particle's S: projectors), upper half only (the lower half comes as the transposed block).
+    A free particle's S is I: skipped. Plain loops: numba hands a 3 x 3 matrix product to BLAS,
+    a microsecond a call. Whole arrays and indices, not rows: a row taken out is a view, with a
+    reference count up and down."""
     r0, c0 = 3 * row, 3 * column
     if c0 + 2 < r0:
         return
@@ -162,12 +164,12 @@ def add_filtered_block(band, row, column, s_row, block, s_column, sign, free_row
             if d < 0:
                 continue
             if free_row and free_column:
-                band[r0 + a, d] += sign * block[a, b]
+                band[r0 + a, d] += sign * blocks[slot, a, b]
                 continue
             total = 0.0
             for k in range(3):
                 for m in range(3):
-                    total += s_row[a, k] * block[k, m] * s_column[m, b]
+                    total += filters[p, a, k] * blocks[slot, k, m] * filters[q, m, b]
             band[r0 + a, d] += sign * total
 
 
@@ -178,7 +180,7 @@ def coarse_matrix(coarse, pattern, blocks, terms, kind, normal):
     aggregate = coarse.aggregate
     band = np.zeros((3 * coarse.count, band_width(coarse) + 1))
     filters = projectors(kind, normal)
-    held = np.empty((3, 3))
+    held = np.empty((1, 3, 3))
     for i in range(kind.shape[0]):
         if aggregate[i] < 0:
             continue
@@ -187,46 +189,52 @@ def coarse_matrix(coarse, pattern, blocks, terms, kind, normal):
             scale = (diagonal[0, 0] + diagonal[1, 1] + diagonal[2, 2]) / 3.0
             for a in range(3):
                 for b in range(3):
-                    held[a, b] = scale * ((1.0 if a == b else 0.0) - filters[i, a, b])
-            add_filtered_block(band, aggregate[i], aggregate[i], filters[i], held, filters[i],
-                               1.0, True, True)
+                    held[0, a, b] = scale * ((1.0 if a == b else 0.0) - filters[i, a, b])
+            add_filtered_block(band, aggregate[i], aggregate[i], filters, i, held, 0, i, 1.0,
+                               True, True)
         for slot in range(pattern.row_start[i], pattern.row_start[i + 1]):
             j = pattern.column[slot]
             if aggregate[j] >= 0:
-                add_filtered_block(band, aggregate[i], aggregate[j], filters[i], blocks[slot],
-                                   filters[j], 1.0, kind[i] == FREE, kind[j] == FREE)
-    block = np.empty((3, 3))
+                add_filtered_block(band, aggregate[i], aggregate[j], filters, i, blocks, slot, j,
+                                   1.0, kind[i] == FREE, kind[j] == FREE)
+    # each spring checked here, and its inline calls handed whole arrays with nothing to return
+    # early from: so LLVM takes out the reference counts of the arrays they are handed (with the
+    # check in add_spring and rows as views, a spring counted 16; the 100 x 100 cloth's A_c took
+    # 9.0 ms to build instead of 1.8: CHANGELOG, issue 56)
+    block = np.empty((1, 3, 3))
     for r in range(runs.shape[0]):
         first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
         for k in range(count):
-            spring_block_of(run_coefficients, start + k, block)
-            add_spring(band, aggregate, kind, first + k, first + k + offset, filters, block)
+            a, b = first + k, first + k + offset
+            if aggregate[a] >= 0 and aggregate[b] >= 0:
+                spring_block_of(run_coefficients, start + k, block)
+                add_spring(band, aggregate[a], aggregate[b], kind[a] == FREE, kind[b] == FREE,
+                           filters, a, b, block)
     for k in range(loose_pairs.shape[0]):
-        spring_block_of(loose_coefficients, k, block)
-        add_spring(band, aggregate, kind, loose_pairs[k, 0], loose_pairs[k, 1], filters, block)
+        a, b = loose_pairs[k, 0], loose_pairs[k, 1]
+        if aggregate[a] >= 0 and aggregate[b] >= 0:
+            spring_block_of(loose_coefficients, k, block)
+            add_spring(band, aggregate[a], aggregate[b], kind[a] == FREE, kind[b] == FREE,
+                       filters, a, b, block)
     return band
 
 
 @inline_kernel
 def spring_block_of(coefficients, k, block):
-    """C = p l l^T + q I of the spring whose coefficients are column k."""
+    """block[0] = C = p l l^T + q I of the spring whose coefficients are column k."""
     p, q = coefficients[0, k], coefficients[1, k]
     for a in range(3):
         for b in range(3):
-            block[a, b] = p * coefficients[2 + a, k] * coefficients[2 + b, k]
-        block[a, a] += q
+            block[0, a, b] = p * coefficients[2 + a, k] * coefficients[2 + b, k]
+        block[0, a, a] += q
 
 
 @inline_kernel
-def add_spring(band, aggregate, kind, a, b, filters, block):
-    """A spring's off-diagonal blocks -C (a, b) and (b, a) into A_c (a hole of a run: C = 0)."""
-    if aggregate[a] < 0 or aggregate[b] < 0:
-        return
-    free_a, free_b = kind[a] == FREE, kind[b] == FREE
-    add_filtered_block(band, aggregate[a], aggregate[b], filters[a], block, filters[b], -1.0,
-                       free_a, free_b)
-    add_filtered_block(band, aggregate[b], aggregate[a], filters[b], block, filters[a], -1.0,
-                       free_b, free_a)
+def add_spring(band, row, column, free_row, free_column, filters, a, b, block):
+    """A spring's off-diagonal blocks -C (a, b) and (b, a) into A_c, C = block[0] (a hole of a
+    run: C = 0); row and column: the aggregates of its particles a and b (both in one)."""
+    add_filtered_block(band, row, column, filters, a, block, 0, b, -1.0, free_row, free_column)
+    add_filtered_block(band, column, row, filters, b, block, 0, a, -1.0, free_column, free_row)
 
 
 @kernel

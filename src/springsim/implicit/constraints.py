@@ -79,26 +79,25 @@ def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
 
 
 @inline_kernel
-def closest_terrain(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, in_reach):
-    """The terrain that particle i, moving at (u0, u1, u2), reaches first this step, with phi, the
-    normal and the normal velocity; terrain -1 if it reaches none. Each terrain's phi and
-    normal at the particle come from ``lookups`` (find_constraints).
+def closest_terrain(epsilon, lookups, row, u0, u1, u2, h, in_reach):
+    """The terrain that a particle moving at (u0, u1, u2) reaches first this step, with phi, the
+    normal and the normal velocity; terrain -1 if it reaches none. Each terrain's phi and normal
+    at the particle are ``lookups[row]`` (find_constraints, or ``swept_lookups`` beyond a
+    deforming mesh's reach).
 
     With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
-    start of a step); without, it means ending the step inside (phi + h u_n < 0). Beyond a
-    deforming mesh's reach its lookup answers infinity, with no normal to look ahead along: the
-    step's path is asked instead (``swept_lookup``). ``epsilon``:
-    the terrains' contact bands; ``radius``: the particle's (model.terrain_offset[i]). Inlined,
-    so it takes arrays, not the model: an inline kernel handed the model counts a reference to
-    each of its arrays at every call.
+    start of a step); without, it means ending the step inside (phi + h u_n < 0). ``epsilon``:
+    the terrains' contact bands. Inlined, handed two arrays, with nothing inlined in it: Numba
+    counts a reference to each array an inline kernel is handed, and LLVM takes the counts out
+    again only where nothing between lets a reference go (a kernel inlined within, handed
+    arrays of its own, does). Handed the terrains' view and the positions for the swept
+    lookups, it counted nine references up and down at every particle (CHANGELOG, issue 56).
     """
     best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
     nx = ny = nz = 0.0
     for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3]
-        if phi == math.inf:
-            phi, mx, my, mz = swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius,
-                                           2.0 * epsilon[t])
+        phi, mx, my, mz = (lookups[row, t, 0], lookups[row, t, 1], lookups[row, t, 2],
+                           lookups[row, t, 3])
         u_n = u0 * mx + u1 * my + u2 * mz
         reached = phi + h * u_n   # distance at the end of the step
         if in_reach:
@@ -109,6 +108,30 @@ def closest_terrain(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, in_
             best, best_phi, best_u_n, earliest = t, phi, u_n, reached
             nx, ny, nz = mx, my, mz
     return best, best_phi, nx, ny, nz, best_u_n
+
+
+@inline_kernel
+def beyond_reach(lookups, i):
+    """Whether a terrain's lookup at particle i answered infinity: a deforming mesh, beyond
+    whose reach the step's path is asked instead (``swept_lookups``)."""
+    for t in range(lookups.shape[1]):
+        if lookups[i, t, 0] == math.inf:
+            return True
+    return False
+
+
+@inline_kernel
+def swept_lookups(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, swept):
+    """swept[0] = particle i's ``lookups``, each that answered infinity (beyond a deforming
+    mesh's reach, with no normal to look ahead along) replaced by the lookup along the step's
+    path (``swept_lookup``) of a particle moving at (u0, u1, u2); ``radius``: the particle's
+    (model.terrain_offset[i])."""
+    for t in range(epsilon.shape[0]):
+        phi, mx, my, mz = lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3]
+        if phi == math.inf:
+            phi, mx, my, mz = swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius,
+                                           2.0 * epsilon[t])
+        swept[0, t, 0], swept[0, t, 1], swept[0, t, 2], swept[0, t, 3] = phi, mx, my, mz
 
 
 @inline_kernel
@@ -155,6 +178,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     terrain found now) if it does not. Fills ``lookups`` for the step's
     update_contacts."""
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
+    swept = np.empty((1, lookups.shape[1], 4))   # a particle's lookups along its path
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
         released = kind[i] == FREE and terrain[i] >= 0
@@ -178,8 +202,15 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
                     phi, mx, my, mz = terrain_at(terrains, t, x[i, 0], x[i, 1], x[i, 2], radius)
                 lookups[i, t, 0], lookups[i, t, 1] = phi, mx
                 lookups[i, t, 2], lookups[i, t, 3] = my, mz
-            t, phi, nx, ny, nz, v_n = closest_terrain(terrains, epsilon, radius, lookups, x, i,
-                                                      v[i, 0], v[i, 1], v[i, 2], h, True)
+            # two calls, so that the usual one, reading the lookups, is inlined alone
+            if beyond_reach(lookups, i):
+                swept_lookups(terrains, epsilon, radius, lookups, x, i, v[i, 0], v[i, 1],
+                              v[i, 2], h, swept)
+                t, phi, nx, ny, nz, v_n = closest_terrain(epsilon, swept, 0, v[i, 0], v[i, 1],
+                                                          v[i, 2], h, True)
+            else:
+                t, phi, nx, ny, nz, v_n = closest_terrain(epsilon, lookups, i, v[i, 0], v[i, 1],
+                                                          v[i, 2], h, True)
             if t >= 0 and released and not joins_afresh(phi, v_n, h, epsilon[t]):
                 terrain[i] = t   # still free, still marked as released
             elif t >= 0:
@@ -349,14 +380,20 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
     changed = 0
     friction_total = friction_moved = 0.0
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
+    swept = np.empty((1, lookups.shape[1], 4))   # a particle's lookups along its path
     for i in range(x.shape[0]):
         if kind[i] == PINNED:
             continue
         u0, u1, u2 = (v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1],
                       v[i, 2] + dv[i, 2] + ddv[i, 2])   # the velocity at the end of the step
         if kind[i] == FREE:
-            t, phi, nx, ny, nz, _ = closest_terrain(terrains, epsilon, model.terrain_offset[i],
-                                                    lookups, x, i, u0, u1, u2, h, False)
+            # two calls, so that the usual one, reading the lookups, is inlined alone
+            if beyond_reach(lookups, i):
+                swept_lookups(terrains, epsilon, model.terrain_offset[i], lookups, x, i, u0, u1,
+                              u2, h, swept)
+                t, phi, nx, ny, nz, _ = closest_terrain(epsilon, swept, 0, u0, u1, u2, h, False)
+            else:
+                t, phi, nx, ny, nz, _ = closest_terrain(epsilon, lookups, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
                 make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,

@@ -202,17 +202,23 @@ def assemble_system(model, layout, state, work, contacts, h, first):
                work.rhs)
     add_external_jacobians(model, layout, h, first, work.x_k, work.v_k, v, work.blocks, work.rhs)
     linearize_contacts(model, contacts, x, v, work.dv, h, work.rhs)
-    work.ddv[:] = 0.0
+    # the particle loop reads its arrays as locals: a field of a named tuple read inside it
+    # counts a reference up and down at every particle (six arrays: CHANGELOG, issue 56)
+    blocks, rhs, normal, surface, dv, ddv = (work.blocks, work.rhs, work.normal, work.surface,
+                                             work.dv, work.ddv)
+    kind, terrain, floor, friction = (memory.kind, memory.terrain, memory.normal_floor,
+                                      memory.friction_damping)
+    ddv[:] = 0.0
     for i in range(x.shape[0]):
-        hold_constrained(i, memory.kind, work.normal, memory.normal_floor, v, work.dv, work.ddv)
-        damping = memory.friction_damping[i]   # the fresh matrix has none yet
-        memory.friction_damping[i] = 0.0
+        hold_constrained(i, kind, normal, floor, v, dv, ddv)
+        damping = friction[i]   # the fresh matrix has none yet
+        friction[i] = 0.0
         if first:   # carried from the last step: back inside the friction cone
-            damping = remembered_friction_in_cone(model, pattern, work.blocks, work.rhs, i,
-                                                  memory.kind, memory.terrain, work.normal,
-                                                  work.surface, v, work.dv, work.ddv, damping)
-        set_friction_damping(i, damping, pattern, work.blocks, work.rhs, work.normal,
-                             work.surface, v, work.dv, memory.friction_damping)
+            damping = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain,
+                                                  normal, surface, v, dv, ddv, damping)
+        if damping != 0.0:   # (a call that would change nothing still counts its arrays)
+            set_friction_damping(i, damping, pattern, blocks, rhs, normal, surface, v, dv,
+                                 friction)
 
 
 @kernel
