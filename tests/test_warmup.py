@@ -337,3 +337,32 @@ def test_ensure_venv_says_what_each_stage_does_before_it_starts(tmp_path):
         if line.startswith("RAN"):
             assert lines[index - 1].startswith("setup: "), lines
     assert "RAN springsim warmup --scene jelly-plane" in lines
+
+
+def test_ctrl_c_during_a_parallel_warmup_ends_every_worker_in_one_line(tmp_path):
+    """Ctrl-C, which a terminal sends to every process of the command, stops a warmup that
+    compiles on worker processes at once: one line, exit 130, no traceback, no worker left
+    compiling (they ignore it; the main process ends them)."""
+    import signal
+
+    environment = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}   # an empty cache
+    process = subprocess.Popen([sys.executable, "-m", "springsim", "warmup", "--scene",
+                                "jelly-plane", "--jobs", "2"], env=environment, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               start_new_session=True)
+    for line in process.stdout:   # the workers have begun: one of them has ended a part
+        if line.startswith("  compiled "):
+            break
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and err.strip().splitlines()[-1] == "interrupted", err
+    assert "Traceback" not in err
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(process.pid, 0)   # anyone of the command's group still there?
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        raise AssertionError("a worker outlived the warmup")

@@ -78,6 +78,7 @@ def is_warm(integrator: str, variants=None) -> bool:
 
 RECORDING = "recording"   # the part that compiles the kernels a run's recording calls
 TICK = 15.0               # s: at most this long without a line while workers compile
+POLL = 0.2                # s between looks at the workers
 
 
 class CompileTask(NamedTuple):
@@ -169,28 +170,39 @@ def run_task(task: CompileTask) -> float:
 def run_tasks(tasks: list, jobs: int, say=print) -> list:
     """Run ``tasks`` on ``jobs`` worker processes (here, one after another, where one job or
     one task); [(task, seconds)] as they ended. While workers compile, a line at least every
-    TICK seconds."""
-    import concurrent.futures
+    TICK seconds. Ctrl-C (or SIGTERM) is the main process's to answer: it ends the workers
+    (multiprocessing's Pool terminates them as its block is left) and stops at once."""
     import multiprocessing
     import time
 
     if jobs <= 1 or len(tasks) <= 1:
         return [(task, run_task(task)) for task in tasks]
-    started, ended = time.monotonic(), []
+    started = last_line = time.monotonic()
+    ended = []
     context = multiprocessing.get_context("spawn")   # a fresh interpreter: no Numba state shared
-    with concurrent.futures.ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=context) as pool:
-        running = {pool.submit(run_task, task): task for task in tasks}
+    with context.Pool(min(jobs, len(tasks)), initializer=_leave_signals_to_the_main) as pool:
+        running = [(task, pool.apply_async(run_task, (task,))) for task in tasks]
         while running:
-            done, _ = concurrent.futures.wait(running, timeout=TICK,
-                                              return_when=concurrent.futures.FIRST_COMPLETED)
-            for future in done:
-                task = running.pop(future)
-                ended.append((task, future.result()))
+            # asked in turn, sleeping between: a signal then finds the main process in Python
+            time.sleep(POLL)
+            for task, result in [entry for entry in running if entry[1].ready()]:
+                running.remove((task, result))
+                ended.append((task, result.get()))
                 say(f"  compiled {task.label()} in {ended[-1][1]:.1f} s")
-            if not done:
+                last_line = time.monotonic()
+            if running and time.monotonic() - last_line >= TICK:
                 say(f"  ... still compiling ({len(running)} to go), "
                     f"{time.monotonic() - started:.0f} s")
+                last_line = time.monotonic()
     return ended
+
+
+def _leave_signals_to_the_main() -> None:
+    """A worker ignores Ctrl-C, which a terminal sends to every process of the command: the
+    main process answers it and ends the workers."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _types(call) -> tuple:
