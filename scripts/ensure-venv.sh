@@ -49,7 +49,7 @@ if [ ! -x .venv/bin/springsim ] || [ pyproject.toml -nt .venv/.installed-core ];
     .venv/bin/pip install --progress-bar off -e .
   touch .venv/.installed-core
   if [ "$first_time" = yes ]; then
-    setup_stage compiling "compiling the kernels of the default scene on every core (springsim warmup --scene jelly-plane; about 2 minutes on two cores, first run only)" \
+    setup_stage compiling "compiling the kernels of the default scene on every core (springsim warmup --scene jelly-plane; about 40 s on two cores, first run only)" \
       .venv/bin/springsim warmup --scene jelly-plane
   fi
 fi
