@@ -3,7 +3,7 @@
 A step kernel is compiled whole, for every feature a scene may use: body and self contact with
 their pair lists, the balls, pins and attachments, the terms (soft pins, wind, ``[[forces]]``),
 the mesh terrains' lookups, the deforming terrains' refits. A model that has none of them (a
-jelly cube or a cloth on the plane, the sphere or the bowl, moving or not: ``is_plain``) runs
+jelly cube alone on the plane, the sphere or the bowl, moving or not: ``is_plain``) runs
 the plain twin of its integrator's serial kernel, in which each of those is replaced by a
 kernel that does nothing (or, for the terrains, a dispatcher that knows only the short
 lookups). What is left is the same code, so a plain model moves bit for bit as under the whole

@@ -48,7 +48,7 @@ class Integrator:
     def parts(self, model, state, dt: float) -> dict[str, KernelCall]:
         """The kernels the serial step calls as kernels of their own, by name, with the
         arguments it calls them with: `springsim warmup` compiles them first, in parallel,
-        and the step's compile then loads them (warmup.py). None for a method that is not
+        and the step's compile then loads them (warmup.py). Empty for a method that is not
         one compiled call."""
         return {}
 
