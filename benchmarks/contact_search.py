@@ -33,6 +33,11 @@ def arguments(simulation):
               "normal_floor": np.zeros(count), "friction_damping": np.zeros(count),
               "lookups": np.zeros((count, terrains, 4))}
     names = inspect.signature(constraints.find_constraints.py_func).parameters
+    if "slots" in names:   # the arrays it writes, in one named tuple (since issue 54)
+        values["slots"] = constraints.ContactSlots(
+            values["kind"], values["terrain"], values["normal"], values["surface"],
+            values["normal_floor"], values["friction_damping"], np.zeros(count, np.int8),
+            np.zeros(count, np.int16))
     return tuple(values[name] for name in names)
 
 

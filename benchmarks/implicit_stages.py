@@ -29,6 +29,7 @@ from springsim.collision.pair_lists.own_pairs import any_self_collision, own_pai
 from springsim.collision.response.penalty import (newton_iterations_needed,
                                                   update_active_contacts)
 from springsim.implicit import cg, constraints
+from springsim.implicit.step_record import no_record
 from springsim.integrators import _steps
 from springsim.integrators import implicit_euler as method
 from springsim.world import aim_pins, move_world, step_end
@@ -68,9 +69,8 @@ def solve(timer, model, scratch, state, contacts, h):
             _steps.add_scaled(work.reaction, work.q, -1.0, work.rhs)
             before, dampers = kind.copy(), memory.friction_damping.copy()
             changed = timer("terrain contact updates", constraints.update_contacts, model, pattern,
-                            work.blocks, work.rhs, x, v, work.dv, work.ddv, h, kind, normal,
-                            work.surface, memory.terrain, floor, memory.friction_damping,
-                            work.reaction, work.lookups)
+                            work.blocks, work.rhs, x, v, work.dv, work.ddv, h,
+                            method.contact_slots(state, work), work.reaction, work.lookups)
             changed = update_active_contacts(contacts, h, work.ddv, work.rhs) > 0 or changed
             released = int(np.sum((before == CONTACT) & (kind == FREE)))
             joined = int(np.sum((before == FREE) & (kind == CONTACT)))
@@ -98,9 +98,8 @@ def step(timer, model, scratch, state, start, h, done, pairs):
     method.copy_state(scratch.start, state)
     timer("world at the step's end", move_world, model, step_end(model, h))
     aim_pins(model, x, v, h)
-    timer("contact search", constraints.find_constraints, model, x, v, h, memory.kind,
-          work.normal, work.surface, memory.terrain, memory.normal_floor,
-          memory.friction_damping, work.lookups)
+    timer("contact search", constraints.find_constraints, model, x, v, h,
+          method.contact_slots(state, work), work.lookups)
     at_start = int(np.sum(memory.kind == CONTACT))
     own, pairs = timer("own pairs", own_pairs_touching, model, x, pairs)
     contacts = timer("body contacts", find_solve_contacts, model, x, v, h, scratch.solve_pairs,
@@ -156,7 +155,8 @@ def main() -> None:
     implicit = method.ImplicitState(state.positions, state.velocities, state.contacts)
     work = method.workspace(layout, implicit.x, model.terrain_epsilon.shape[0])
     scratch = method.Scratch(layout, settings, work, state.solve_pairs, method.Statistics.zeros(),
-                             method.saved_state(implicit), method.saved_state(implicit))
+                             method.saved_state(implicit), method.saved_state(implicit),
+                             no_record())
     pairs = _steps.pairs_now(model, implicit.x, state.pairs)
     start = _steps.step_start(model, implicit.x)
     timer, logs = Timer(), []

@@ -8,7 +8,9 @@ the 100 x 100 hanging cloth (cloth-hang, self-collision off) under implicit_eule
 0.5 s; jelly-stack through terrain and body-body contact under rk4 at 1e-3 s for 1.5 s, and
 under implicit_euler at 1/60 s for 0.5 s (as benchmarks/gradients.py stack-implicit: later, its
 body-body contacts change within a solve's tolerance, which the implicit replay refuses); the
-flag in its gusty wind (12 x 12) under rk4 and implicit_euler. Each is the gradient of the mean
+flag in its gusty wind (12 x 12) under rk4 and implicit_euler; the default cube landing and
+resting on the plane, and the cubes on the sphere and the tilted plane, under implicit_euler at
+1/60 s (the terrain contact replay: floors, releases, friction dampers). Each is the gradient of the mean
 height at 30 fps with respect to the parameters listed (springsim.gradient).
 """
 import argparse
@@ -28,6 +30,12 @@ CASES = {
                   ["bodies.0.structural.ks", "bodies.1.particle_mass", "terrains.0.friction"]),
     "stack-implicit": ("jelly-stack", [], "implicit_euler", 1 / 60, 0.5,
                        ["bodies.0.structural.ks", "bodies.1.particle_mass", "terrains.0.friction"]),
+    "landing-implicit": ("jelly-plane", [], "implicit_euler", 1 / 60, 1.6,
+                         ["bodies.0.structural.ks", "terrains.0.friction"]),
+    "sphere-implicit": ("jelly-sphere", [], "implicit_euler", 1 / 60, 1.0,
+                        ["bodies.0.structural.ks", "terrains.0.friction"]),
+    "tilted-implicit": ("jelly-tilted", [], "implicit_euler", 1 / 60, 1.5,
+                        ["bodies.0.structural.ks", "terrains.0.friction"]),
     "flag-rk4": ("flag", ["bodies.0.particles_per_edge=12"], "rk4", 5e-4, 0.1,
                  ["bodies.0.structural.ks", "wind.drag", "wind.gusts.strength"]),
     "flag-implicit": ("flag", ["bodies.0.particles_per_edge=12"], "implicit_euler", 1 / 60,

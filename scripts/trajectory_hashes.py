@@ -4,6 +4,10 @@ change to the code leaves the trajectories as they were.
     .venv/bin/python scripts/trajectory_hashes.py OUT.npz              # this checkout's code
     PYTHONPATH=/other/checkout/src .venv/bin/python scripts/trajectory_hashes.py OTHER.npz
     .venv/bin/python scripts/trajectory_hashes.py --compare OTHER.npz OUT.npz
+    .venv/bin/python scripts/trajectory_hashes.py OUT.npz --integrators implicit_euler
+
+``--integrators`` and ``--scenes`` keep only those runs (``--compare`` compares the runs of the
+first file).
 
 Each run goes 1 s (cloth-balls-100, the benchmark scene, 0.05 s) at the scene's own step for the
 explicit methods, and at 1/60 and 1/30 s for implicit_euler; a run that diverges stops there.
@@ -18,12 +22,12 @@ import time
 import numpy as np
 
 
-def runs():
+def runs(integrators=None, scenes=None):
     import springsim
 
-    for scene in springsim.preset_names():
+    for scene in scenes or springsim.preset_names():
         seconds = 0.05 if scene == "cloth-balls-100" else 1.0
-        for integrator in springsim.integrator_names():
+        for integrator in integrators or springsim.integrator_names():
             steps = [1 / 60, 1 / 30] if integrator == "implicit_euler" else [None]
             for dt in steps:
                 yield scene, integrator, dt, seconds
@@ -43,9 +47,9 @@ def simulate(scene, integrator, dt, seconds):
     return sim.positions.copy(), sim.velocities.copy(), ending
 
 
-def record(path):
+def record(path, integrators=None, scenes=None):
     arrays = {}
-    for scene, integrator, dt, seconds in runs():
+    for scene, integrator, dt, seconds in runs(integrators, scenes):
         name = f"{scene}|{integrator}|{'scene' if dt is None else f'{dt:.6f}'}"
         started = time.perf_counter()
         x, v, ending = simulate(scene, integrator, dt, seconds)
@@ -78,10 +82,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("paths", nargs="+")
     parser.add_argument("--compare", action="store_true")
+    parser.add_argument("--integrators", nargs="+", help="only these (default: every one)")
+    parser.add_argument("--scenes", nargs="+", help="only these built-in scenes (default: all)")
     arguments = parser.parse_args()
     if arguments.compare:
         sys.exit(0 if compare(*arguments.paths) else 1)
-    record(arguments.paths[0])
+    record(arguments.paths[0], arguments.integrators, arguments.scenes)
 
 
 if __name__ == "__main__":

@@ -223,7 +223,7 @@ def test_a_cloth_thrown_fast_at_a_deforming_plate_does_not_pass_through(tmp_path
     """A 10 x 10 cloth thrown down at 8 or 16 m/s (13 and 27 cm a step at 1/60 s, the plate's
     reach 4 cm) onto a slowly rising plate under implicit_euler: at no step is a particle below
     the plate. Beyond reach the lookup answers infinity, so the solve's look-ahead asks along
-    the step's path (implicit/constraints.swept_lookup); without it the cloth passed through
+    the step's path (implicit/terrain_lookups.swept_lookup); without it the cloth passed through
     from these heights."""
     from springsim.bodies.cloth import Cloth
     from springsim.scene import Scene

@@ -17,7 +17,7 @@ from springsim.bodies.balls import Ball, Balls
 from springsim.bodies.cube import Cube
 from springsim.errors import SceneError
 from springsim.gradients import gradient
-from springsim.gradients import body_contact
+from springsim.gradients import body_contact, stencil_geometry
 from springsim.scene import Scene
 from test_gradients import STEPS, assert_gradients_match, weighted_squares
 
@@ -228,8 +228,8 @@ def test_concentric_balls_take_the_forwards_upward_normal_and_no_nan():
     """A ball and its partner at one point: the forward pushes them apart along +y; the
     replay's normal is the same and constant (its complex-step derivative zero), never NaN."""
     x4 = np.zeros((1, 4, 3), complex)
-    x4[0, 0, 0] += 1j * body_contact.STEP
-    weights, normal, gap = body_contact.ball_geometry(x4, None)
+    x4[0, 0, 0] += 1j * stencil_geometry.STEP
+    weights, normal, gap = stencil_geometry.ball_geometry(x4, None)
     assert np.array_equal(normal.real, [[0.0, 1.0, 0.0]])
     assert np.all(np.isfinite(normal)) and np.all(normal.imag == 0.0)
 

@@ -24,6 +24,7 @@ from springsim.collision.pair_lists.solve_pairs import kept_surface_pairs
 from springsim.integrators import get_integrator
 from springsim.integrators.implicit_euler import (ImplicitState, Scratch, Settings, Statistics,
                                                   backward_euler_step, saved_state, workspace)
+from springsim.implicit.step_record import no_record
 from springsim.presets import preset
 from springsim.reference import reference_forces
 from springsim.scene import Scene
@@ -381,7 +382,7 @@ def test_the_solve_never_moves_a_particle_into_a_terrain(terrain, surface_point,
     work = workspace(layout, simulation.positions, arrays.terrain_epsilon.shape[0])
     scratch = Scratch(layout, Settings(1, 1e-8, 1000), work,
                       kept_surface_pairs(simulation.positions), Statistics.zeros(),
-                      saved_state(state), saved_state(state))
+                      saved_state(state), saved_state(state), no_record())
     no_pairs = no_pair_list()   # no self-colliding surface: no pair of one body for the solve
     touched = False
     for _ in range(12):

@@ -21,7 +21,8 @@ import numpy as np
 
 from ..spring_runs import run_layout
 from .attachments import hold, hold_vjp, holds
-from .body_contact import check_replayed, far_from_bodies, respond, respond_vjp
+from .body_contact import check_replayed, far_from_bodies, respond
+from .body_contact_adjoint import respond_vjp
 from .contact import (contact_accelerations, contact_accelerations_vjp, far_from_terrains,
                       far_steps, impacts, impacts_vjp)
 from .run_kernels import ROWS, entry_table, rk4_step_vjp
@@ -29,8 +30,8 @@ from .physics import (accelerations, accelerations_vjp, step_accelerations,
                       step_accelerations_vjp)
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
                               replay as bodies_replay, touches_bodies)
-from .implicit_contact import adjoint as contact_adjoint, replay
-from .implicit_lookup import touches_terrains
+from .implicit_contact import adjoint as contact_adjoint
+from .implicit_replay import replay, touched_terrains
 from .solve import ForwardSolver, newton_estimates, system_vjp_iteration
 from .clock import at_time
 from .pins import aim, place, release
@@ -344,12 +345,11 @@ class ImplicitEulerAdjoint(Adjoint):
         release(physical, x_bar, v_bar)   # the pins on paths, put on them after the step
         v = aim(physical, x, v, h)
         bodies = touches_bodies(physical, h, start, end)
-        if len(start) == 3 and touches_terrains(physical, h, start, end):
-            kind, terrain, dampers = start[2]
+        if len(start) == 4 and touched_terrains(physical, start.record):
             carried = np.zeros(len(x)) if self.carried_bar is None else self.carried_bar
             penalty = PenaltyStep(physical, h, x, v, iterations) if bodies else None
-            x_out, v_out, _, replayed = replay(physical, h, x, v, dampers, kind, terrain,
-                                               iterations, penalty)
+            x_out, v_out, _, replayed = replay(physical, h, x, v, start.memory, start.record,
+                                               penalty)
             if bodies:
                 check_solved((x_out, v_out), end, h, self.integrator.cg_tolerance)
             x_bar, v_bar, self.carried_bar = contact_adjoint(physical, h, x, v, replayed, x_bar,

@@ -38,8 +38,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..collision.contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, EDGE_EDGE,
-                                      PASSES, POINT_TRIANGLE, SolveContacts)
+from ..collision.contact_sets import (BALL_POINT, BALL_SAMPLE, BALL_TRIANGLE, PASSES,
+                                      SolveContacts)
 from ..collision.contact_sets.solve import find_solve_contacts
 from ..collision.pair_lists.keeping import start_surface_pairs
 from ..collision.pair_lists.own_pairs import (MOST_OWN_REDOS, OwnPairs, grown_own_pairs,
@@ -48,10 +48,10 @@ from ..collision.pair_lists.solve_pairs import kept_surface_pairs
 from ..collision.response.penalty import (STIFFNESS, linearize_contacts,
                                           newton_iterations_needed, update_active_contacts)
 from ..integrators.implicit_euler import MAX_CONTACT_UPDATES
-from .body_contact import (STEP, Bars, Contacts, check_replayed, closest_weights, cross, dot,
-                           dot4, far_from_bodies, point_geometry, segment_parameters,
-                           gather, impulse_passes, impulse_passes_vjp, mobilities, mobility_vjp,
-                           respond, respond_vjp, surface_params)
+from .body_contact import (Contacts, check_replayed, far_from_bodies, gather, impulse_passes,
+                           mobilities, respond, surface_params)
+from .stencil_geometry import STEP, dot, solve_stencil, stencil_branches
+from .body_contact_adjoint import Bars, dot4, impulse_passes_vjp, mobility_vjp, respond_vjp
 from .attachments import hold, hold_vjp, holds
 from .pins import place, release
 from .solve import estimate, iteration_vjp, newton_rhs
@@ -337,67 +337,6 @@ def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
     np.add.at(estimate_bar, nodes.ravel(), e4_bar.reshape(-1, 3))
     np.add.at(x_bar, nodes.ravel(), s4_bar.reshape(-1, 3))
     return estimate_bar
-
-
-def stencil_branches(shape, c, n, e4, s4):
-    """The branches narrow_phase/solve.stencil took: the normal from the start (the step passed
-    the pair through), a point's face, its closest-point region, the face normal's side."""
-    point = shape == POINT_TRIANGLE
-    with np.errstate(divide="ignore", invalid="ignore"):   # a ball-point's "triangle" is a point
-        w, region = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3])
-    face = point & (w[:, 0] > 0.0) & (w[:, 1] > 0.0) & (w[:, 2] > 0.0)
-    d, s = np.einsum("kj,kjc->kc", c, e4), np.einsum("kj,kjc->kc", c, s4)
-    flipped = ~point & (dot(d, s) <= 0.0)
-    start_normal = cross(s4[:, 2] - s4[:, 1], s4[:, 3] - s4[:, 1])
-    sign = np.where(dot(start_normal, s) < 0.0, -1.0, 1.0)
-    return flipped, face, region, sign
-
-
-def solve_stencil(shape, flipped, face, region, sign, e4, s4):
-    """(weights, normal) of narrow_phase/solve.stencil in the branches given, for complex
-    positions (the complex step)."""
-    point = shape == POINT_TRIANGLE
-    kind = np.result_type(e4, s4)
-    weights = np.zeros((len(shape), 4), dtype=kind)
-    normal = np.zeros((len(shape), 3), dtype=kind)
-    if point.any():   # the post-step pass's stencil, at the estimate
-        weights[point], normal[point], _ = point_geometry(e4[point], face[point], region[point],
-                                                          sign[point])
-    for rows, stencil_weights in ((shape == EDGE_EDGE, edge_weights),
-                                  (shape == BALL_TRIANGLE, ball_triangle_weights),
-                                  (shape == BALL_POINT, lambda e4, _: BALL_POINT_WEIGHTS),
-                                  (shape == BALL_SAMPLE, lambda e4, _: BALL_SAMPLE_WEIGHTS)):
-        if rows.any():
-            w = stencil_weights(e4[rows], region[rows]) * np.ones((rows.sum(), 1))
-            weights[rows] = w
-            normal[rows] = stencil_normal(w, e4[rows], s4[rows], flipped[rows])
-    return weights, normal
-
-
-BALL_POINT_WEIGHTS = np.array([1.0, -1.0, 0.0, 0.0])
-BALL_SAMPLE_WEIGHTS = np.array([1.0, -1.0 / 3.0, -1.0 / 3.0, -1.0 / 3.0])
-
-
-def edge_weights(e4, _region):
-    s, t, _ = segment_parameters(*(e4[:, i] for i in range(4)))
-    return np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
-
-
-def ball_triangle_weights(e4, region):
-    w, _ = closest_weights(e4[:, 0], e4[:, 1], e4[:, 2], e4[:, 3], region)
-    return np.concatenate([np.ones_like(w[:, :1]), -w], axis=1)
-
-
-def stencil_normal(w, e4, s4, flipped):
-    """d / |d|, d = sum_i c_i e_i, or the start's sum where the step passed the pair through;
-    up where the two are concentric (a ball about a point), as the forward chooses."""
-    d = np.einsum("kj,kjc->kc", w, e4)
-    start = np.einsum("kj,kjc->kc", w, s4)
-    chosen = np.where(flipped[:, None], start, d)
-    length = np.sqrt(dot(chosen, chosen))
-    apart = np.real(length) > 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(apart[:, None], chosen / length[:, None], np.array([0.0, 1.0, 0.0]))
 
 
 # ---- with terrain contact in the same step (implicit_contact.py's replay takes these) -----------

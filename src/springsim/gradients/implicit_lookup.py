@@ -1,10 +1,10 @@
 """How backward Euler's contact replay (implicit_contact.py) sees the terrains: once per step, at
-the step's start positions, each terrain where the step's end has it (constraints.closest_terrain
+the step's start positions, each terrain where the step's end has it (terrain_lookups.closest_terrain
 in the forward), whichever solve asks.
 
 A deforming mesh's grid sees a point only within its reach (terrains/deforming_mesh.py): beyond,
 the forward's lookup answers infinity and asks points y = x + sigma u along the step's path
-instead (constraints.swept_lookup, sigma = s h), so that a fast particle cannot pass through
+instead (terrain_lookups.swept_lookup, sigma = s h), so that a fast particle cannot pass through
 unseen. The first point that sees the surface gives the contact phi = d(y) - sigma u . n(y),
 n = n(y), and no surface velocity (the start is beyond reach). Its cotangents reach x through
 y, and the velocity u it looked along as sigma y_bar - sigma phi_bar n (``swept_vjp``). At the
@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import SceneError
-from ..implicit.constraints import MAX_SWEEP_POINTS
+from ..implicit.terrain_lookups import MAX_SWEEP_POINTS
 from .clock import STEP_START
 from .contact import along, followed
 from .terrain_shapes import STRAIGHT_UP, surface_velocity
@@ -62,7 +62,7 @@ def look_up(physical, x, v, h):
 
 def swept(physical, lookup: Lookup, x, u, h, rows) -> Lookup:
     """The lookup with each of ``rows`` (particles it does not see) asked along its path at u,
-    as constraints.swept_lookup asks: points ``spacing`` (2 bands) apart up to the step's end,
+    as terrain_lookups.swept_lookup asks: points ``spacing`` (2 bands) apart up to the step's end,
     the first that sees the surface giving phi, n and the point; infinity if none."""
     if not len(rows):   # asked at every solve's update, of every terrain
         return lookup
@@ -113,20 +113,3 @@ def swept_vjp(shape, at, sigma, n, u, phi_bar, n_bar):
                                              n_bar - (phi_bar * sigma)[:, None] * u)
     return y_bar, sigma[:, None] * (y_bar - phi_bar[:, None] * n)
 
-
-def touches_terrains(physical, h, start, end) -> bool:
-    """Whether a step may have had terrain contacts: some free particle within a terrain's
-    reach at its start (find_constraints' test; one the lookup does not see, within its travel)
-    or within its band at its end (a contact made during the step ends on its floor, in the
-    band). Otherwise the step is the plain one (solve.py), which is quicker."""
-    planes = physical.planes
-    (x, v), x_end = start[:2], end[0]
-    travel = h * np.sqrt(np.einsum("ij,ij->i", v, v))
-    for t, shape in followed(physical.planes):
-        phi = shape.distance(x, planes.offset)
-        reach = np.minimum(phi, np.where(seen(shape, x), phi + h * along(v, shape.normals(x)),
-                                         phi - travel))
-        near = np.minimum(reach, shape.distance(x_end, planes.offset))
-        if np.any(physical.free & (near < planes.epsilon[t])):
-            return True
-    return False

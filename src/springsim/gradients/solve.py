@@ -133,9 +133,13 @@ def solve_reduced(matrix, rhs, held, basis):
     return (basis @ w).reshape(held.shape) + held
 
 
-def rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar):
-    """Add lam . d(newton_rhs)/d(x, v, x_k, v_k, parameters), its -M dv term aside (the
-    caller's: it also takes dv's cotangent)."""
+def rhs_vjp(physical, h, start, estimate, dv, first, lam, start_bar, estimate_bar, bar):
+    """Add lam . d(newton_rhs)/d(x, v, x_k, v_k, parameters) into ``start_bar`` (x_bar, v_bar),
+    ``estimate_bar`` (xk_bar, vk_bar) and ``bar``, for the step's ``start`` (x, v) and the
+    Newton ``estimate`` (x_k, v_k); its -M dv term aside (the caller's: it also takes dv's
+    cotangent)."""
+    (x, v), (x_k, v_k) = start, estimate
+    (x_bar, v_bar), (xk_bar, vk_bar) = start_bar, estimate_bar
     spring_forces_vjp(physical, x_k, v_k, h * lam, xk_bar, vk_bar, bar)
     free = physical.free
     bar.gravity += h * (physical.mass[free, None] * lam[free]).sum(axis=0)
@@ -201,7 +205,8 @@ def iteration_vjp(physical, h, x, v, dv, ddv, first, lam, dv_bar, x_bar, v_bar, 
     x_k, v_k = estimate(x, v, dv, h, first)
     xk_bar, vk_bar = np.zeros_like(x), np.zeros_like(x)
     # r_k's share
-    rhs_vjp(physical, h, x, v, x_k, v_k, dv, first, lam, x_bar, v_bar, xk_bar, vk_bar, bar)
+    rhs_vjp(physical, h, (x, v), (x_k, v_k), dv, first, lam, (x_bar, v_bar), (xk_bar, vk_bar),
+            bar)
     dv_bar = dv_bar - physical.solve_mass[:, None] * lam
     # A_k's share: the cotangent of A is -lambda ddv^T
     system_product_vjp(physical, x_k, ddv, -lam, h, xk_bar, bar)

@@ -15,11 +15,13 @@ instead of evaluating the forces again (adjoints.RK4Adjoint), and the recording 
 step.
 """
 import math
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
+from ..implicit.step_record import copied, grown, new_record, overflowed
 from .physics import Cotangents
 from .clock import STEP_START
 
@@ -58,14 +60,72 @@ def keeps_memory(simulation) -> bool:
     return simulation.integrator.name == "implicit_euler" and bool(simulation.model.terrains)
 
 
+class Memory(NamedTuple):
+    """Backward Euler's contact memory at a step's start (state.ContactMemory's part the
+    adjoint reads)."""
+
+    kind: np.ndarray               # (P,) the last step's constraints
+    terrain: np.ndarray            # (P,) their terrains
+    friction_damping: np.ndarray   # (P,) the dampers carried into this step
+
+
+class Kept(NamedTuple):
+    """A step's start with backward Euler's contact memory, and what the step decided."""
+
+    x: np.ndarray
+    v: np.ndarray
+    memory: Memory
+    record: object   # implicit/step_record.StepRecord, the step's (None for the last state)
+
+
 def snapshot(state, memory: bool):
-    """(x, v) of a state, or (x, v, (kind, terrain, friction dampers)) with its memory."""
+    """(x, v) of a state, or Kept with its memory (the step's record added after the step)."""
     x, v = state.positions.copy(), state.velocities.copy()
     if not memory:
         return x, v
     contacts = state.contacts
-    return x, v, (contacts.kind.copy(), contacts.terrain.copy(),
-                  contacts.friction_damping.copy())
+    return Kept(x, v, Memory(contacts.kind.copy(), contacts.terrain.copy(),
+                             contacts.friction_damping.copy()), None)
+
+
+def recorded_step(simulation, states):
+    """One step; where the integrator keeps a record of it (backward Euler with terrains:
+    ImplicitEuler.record), the record goes with the step's start, ``states[-1]`` (if any). A
+    step that wanted more room than the record had is taken again from its start with more."""
+    integrator = simulation.integrator
+    record = getattr(integrator, "record", None)
+    if record is None:
+        simulation.step(1)
+        return
+    before = simulation.state.copy()
+    simulation.step(1)
+    while overflowed(integrator.record):
+        integrator.record = grown(integrator.record)
+        simulation.state = before.copy()
+        simulation.step(1)
+    if states and isinstance(states[-1], Kept):
+        states[-1] = states[-1]._replace(record=copied(integrator.record))
+
+
+def record_bytes(state) -> int:
+    """The bytes of a kept step's record (0 for anything else)."""
+    if not isinstance(state, Kept) or state.record is None:
+        return 0
+    return sum(array.nbytes for array in state.record)
+
+
+@contextmanager
+def recording(simulation):
+    """Within it, backward Euler's steps keep their decisions for the adjoint (where it has
+    terrains: keeps_memory)."""
+    if not keeps_memory(simulation):
+        yield
+        return
+    simulation.integrator.record = new_record(simulation.model.particle_count, 16, 4)
+    try:
+        yield
+    finally:
+        simulation.integrator.record = None
 
 
 def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
@@ -80,19 +140,21 @@ def record(simulation, steps: int, frame_steps: np.ndarray, memory_limit: int):
         return frames, record_keeping(simulation, steps, stride, stages, wanted, frames)
     states, stored = [], 0
     times = np.empty(steps)   # the forward's own clock: start + n h rounds otherwise
-    for n in range(steps + 1):
-        state = simulation.state
-        if n in wanted:
-            frames[wanted[n]] = state.positions
-        if stride == 1:
-            states.append(snapshot(state, memory))
-            stored += particles * (65 if memory else 48)
-        elif n % stride == 0 and n < steps:
-            states.append(state.copy())
-            stored += particles * 48
-        if n < steps:
-            times[n] = state.time
-            simulation.step(1)
+    with recording(simulation) if stride == 1 else nullcontext():
+        for n in range(steps + 1):
+            state = simulation.state
+            if n in wanted:
+                frames[wanted[n]] = state.positions
+            if stride == 1:
+                states.append(snapshot(state, memory))
+                stored += particles * (65 if memory else 48)
+            elif n % stride == 0 and n < steps:
+                states.append(state.copy())
+                stored += particles * 48
+            if n < steps:
+                times[n] = state.time
+                recorded_step(simulation, states if stride == 1 else None)
+    stored += sum(record_bytes(state) for state in states)
     return frames, Tape(steps, stride, states, times,
                         stored + (stride > 1) * stride * particles * 48)
 
@@ -161,10 +223,11 @@ def stretch(simulation, tape: Tape, first: int):
         return [(start[0], start[1]) for start in run.starts], run.kept, run.starts
     states = []
     memory = keeps_memory(simulation)
-    for n in range(first, last + 1):
-        states.append(snapshot(simulation.state, memory))
-        if n < last:
-            simulation.step(1)
+    with recording(simulation):
+        for n in range(first, last + 1):
+            states.append(snapshot(simulation.state, memory))
+            if n < last:
+                recorded_step(simulation, states)
     return states, None, None
 
 

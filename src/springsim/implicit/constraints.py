@@ -55,121 +55,71 @@ One terrain per particle: the one it reaches first. A particle touching two terr
 the second handled by the impact pass alone.
 """
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import inline_kernel, kernel
 from ..terrains import still_terrain_distance
 from ..world import surface_velocity, terrain_at, terrain_view
+from .terrain_lookups import beyond_reach, closest_terrain, swept_lookups
 
 FREE, CONTACT, PINNED = 0, 1, 2
+# how a contact's floor came about (lowest_normal_velocity): -phi / h, the normal velocity
+# itself, the surface's normal velocity (slowed to it), or zero (inside: -max(phi, 0) / h)
+FLOOR_GAP, FLOOR_VELOCITY, FLOOR_ZERO, FLOOR_INSIDE = 0, 1, 2, 3
+# what a pass decided for each particle (ContactSlots.case; implicit/step_record.py keeps them
+# for the gradient): nothing, a carried damper capped to the friction cone, a damper chosen for
+# a contact that slides or one friction holds, a contact released, a contact made (GROWN plus
+# its terrain's index)
+UNCHANGED, CAPPED, SLIDING, HOLDING, RELEASED, GROWN = 0, 1, 2, 3, 4, 8
 SLIP_SPEED = 1e-6        # m/s, the creep speed below which friction acts as a plain damper
 FRICTION_SETTLED = 0.02  # relative change of the friction impulses that needs no new solve
-MAX_SWEEP_POINTS = 64    # the most points of a step's path a swept lookup asks (swept_lookup)
+
+
+class ContactSlots(NamedTuple):
+    """Where the constraints of a step are written, per particle: the state's contact memory
+    and the step's work arrays (integrators/implicit_euler.py)."""
+
+    kind: np.ndarray              # (P,) int8: FREE, CONTACT or PINNED
+    terrain: np.ndarray           # (P,) int64: the contact's terrain; free: a release's mark
+    normal: np.ndarray            # (P, 3): the contact's terrain normal
+    surface: np.ndarray           # (P, 3) m/s: the terrain surface's velocity there
+    normal_floor: np.ndarray      # (P,) m/s: the lowest normal velocity the contact allows
+    friction_damping: np.ndarray  # (P,) N s/m: the friction damper in the system
+    floor_case: np.ndarray        # (P,) int8: how the floor came about (FLOOR_GAP, ...)
+    case: np.ndarray              # (P,) int16: what the last pass decided (UNCHANGED, ...)
 
 
 @kernel
 def lowest_normal_velocity(phi, v_n, s_n, h, epsilon):
-    """The floor a contact's normal velocity is held at by the end of the step (module doc);
-    s_n is the terrain surface's normal velocity (zero for a still terrain): in the band a
-    particle may slow down to it but not fall behind it."""
+    """(the floor a contact's normal velocity is held at by the end of the step (module doc),
+    which of its expressions it is: FLOOR_GAP, ...); s_n is the terrain surface's normal
+    velocity (zero for a still terrain): in the band a particle may slow down to it but not
+    fall behind it."""
     if phi >= epsilon:
-        return -phi / h
-    return max(s_n + min(v_n - s_n, 0.0), -max(phi, 0.0) / h)
+        return -phi / h, FLOOR_GAP
+    low, gap = s_n + min(v_n - s_n, 0.0), -max(phi, 0.0) / h
+    if low >= gap:
+        return low, FLOOR_VELOCITY if v_n - s_n < 0.0 else FLOOR_ZERO
+    return gap, FLOOR_GAP if phi > 0.0 else FLOOR_INSIDE
 
 
 @inline_kernel
-def closest_terrain(epsilon, lookups, row, u0, u1, u2, h, in_reach):
-    """The terrain that a particle moving at (u0, u1, u2) reaches first this step, with phi, the
-    normal and the normal velocity; terrain -1 if it reaches none. Each terrain's phi and normal
-    at the particle are ``lookups[row]`` (find_constraints, or ``swept_lookups`` beyond a
-    deforming mesh's reach).
-
-    With ``in_reach``, reaching means phi < epsilon or phi + h u_n < epsilon (contacts at the
-    start of a step); without, it means ending the step inside (phi + h u_n < 0). ``epsilon``:
-    the terrains' contact bands. Inlined, handed two arrays, with nothing inlined in it: Numba
-    counts a reference to each array an inline kernel is handed, and LLVM takes the counts out
-    again only where nothing between lets a reference go (a kernel inlined within, handed
-    arrays of its own, does). Handed the terrains' view and the positions for the swept
-    lookups, it counted nine references up and down at every particle (CHANGELOG, issue 56).
-    """
-    best, best_phi, best_u_n, earliest = -1, 0.0, 0.0, np.inf
-    nx = ny = nz = 0.0
-    for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = (lookups[row, t, 0], lookups[row, t, 1], lookups[row, t, 2],
-                           lookups[row, t, 3])
-        u_n = u0 * mx + u1 * my + u2 * mz
-        reached = phi + h * u_n   # distance at the end of the step
-        if in_reach:
-            touching = phi < epsilon[t] or reached < epsilon[t]
-        else:
-            touching = reached < 0.0
-        if touching and reached < earliest:
-            best, best_phi, best_u_n, earliest = t, phi, u_n, reached
-            nx, ny, nz = mx, my, mz
-    return best, best_phi, nx, ny, nz, best_u_n
-
-
-@inline_kernel
-def beyond_reach(lookups, i):
-    """Whether a terrain's lookup at particle i answered infinity: a deforming mesh, beyond
-    whose reach the step's path is asked instead (``swept_lookups``)."""
-    for t in range(lookups.shape[1]):
-        if lookups[i, t, 0] == math.inf:
-            return True
-    return False
-
-
-@inline_kernel
-def swept_lookups(terrains, epsilon, radius, lookups, x, i, u0, u1, u2, h, swept):
-    """swept[0] = particle i's ``lookups``, each that answered infinity (beyond a deforming
-    mesh's reach, with no normal to look ahead along) replaced by the lookup along the step's
-    path (``swept_lookup``) of a particle moving at (u0, u1, u2); ``radius``: the particle's
-    (model.terrain_offset[i])."""
-    for t in range(epsilon.shape[0]):
-        phi, mx, my, mz = lookups[i, t, 0], lookups[i, t, 1], lookups[i, t, 2], lookups[i, t, 3]
-        if phi == math.inf:
-            phi, mx, my, mz = swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius,
-                                           2.0 * epsilon[t])
-        swept[0, t, 0], swept[0, t, 1], swept[0, t, 2], swept[0, t, 3] = phi, mx, my, mz
-
-
-@inline_kernel
-def swept_lookup(terrains, t, x, i, u0, u1, u2, h, radius, spacing):
-    """(phi, normal) for particle i beyond a deforming mesh's reach: the first of the points
-    x + s h u along the step (``spacing`` apart, s up to 1) that the lookup finds stands in, with
-    the start's distance along its normal, phi_s - s h u . n; infinity if none. The reach is at
-    least 4 contact bands, so points 2 bands apart cannot all miss a surface the path crosses,
-    and a particle that moves less than that cannot reach the band: it is not asked. Without
-    this a particle faster than reach / h would pass through unseen."""
-    travel = h * math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-    if not travel >= spacing:
-        return math.inf, 0.0, 1.0, 0.0
-    count = min(int(math.ceil(travel / spacing)), MAX_SWEEP_POINTS)
-    for k in range(1, count + 1):
-        s = k / count
-        phi, mx, my, mz = terrain_at(terrains, t, x[i, 0] + s * h * u0, x[i, 1] + s * h * u1,
-                                     x[i, 2] + s * h * u2, radius)
-        if phi != math.inf:
-            return phi - s * h * (u0 * mx + u1 * my + u2 * mz), mx, my, mz
-    return math.inf, 0.0, 1.0, 0.0
-
-
-@inline_kernel
-def make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal, surface,
-                 terrain, normal_floor):
-    kind[i] = CONTACT
-    terrain[i] = t
-    normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+def make_contact(terrains, epsilon, x, i, t, found, h, slots):
+    """Particle i becomes a contact with terrain t, ``found`` = (phi, nx, ny, nz, v_n) there."""
+    phi, nx, ny, nz, v_n = found
+    slots.kind[i] = CONTACT
+    slots.terrain[i] = t
+    slots.normal[i, 0], slots.normal[i, 1], slots.normal[i, 2] = nx, ny, nz
     s0, s1, s2 = surface_velocity(terrains, t, x[i, 0], x[i, 1], x[i, 2])
-    surface[i, 0], surface[i, 1], surface[i, 2] = s0, s1, s2
-    normal_floor[i] = lowest_normal_velocity(phi, v_n, s0 * nx + s1 * ny + s2 * nz, h,
-                                             epsilon[t])
+    slots.surface[i, 0], slots.surface[i, 1], slots.surface[i, 2] = s0, s1, s2
+    slots.normal_floor[i], slots.floor_case[i] = lowest_normal_velocity(
+        phi, v_n, s0 * nx + s1 * ny + s2 * nz, h, epsilon[t])
 
 
 @kernel
-def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floor,
-                     friction_damping, lookups):
+def find_constraints(model, x, v, h, slots, lookups):
     """Classify every particle at the start of a step (PINNED, FREE or CONTACT); set each
     contact's terrain, normal and floor. A contact that continues one of the last step keeps
     its friction damper as the first guess; a new one starts without. ``kind`` and ``terrain``
@@ -178,6 +128,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
     terrain found now) if it does not. Fills ``lookups`` for the step's
     update_contacts."""
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
+    kind, terrain, friction_damping = slots.kind, slots.terrain, slots.friction_damping
     swept = np.empty((1, lookups.shape[1], 4))   # a particle's lookups along its path
     for i in range(x.shape[0]):
         previous = terrain[i] if kind[i] == CONTACT else -1
@@ -214,8 +165,7 @@ def find_constraints(model, x, v, h, kind, normal, surface, terrain, normal_floo
             if t >= 0 and released and not joins_afresh(phi, v_n, h, epsilon[t]):
                 terrain[i] = t   # still free, still marked as released
             elif t >= 0:
-                make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
-                             surface, terrain, normal_floor)
+                make_contact(terrains, epsilon, x, i, t, (phi, nx, ny, nz, v_n), h, slots)
         if kind[i] != CONTACT or terrain[i] != previous:
             friction_damping[i] = 0.0
 
@@ -299,8 +249,8 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, surface, v, dv,
 @kernel
 def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, normal, surface,
                                 v, dv, ddv, damping):
-    """The friction damper c that contact i carries over from the last step, lowered where it
-    would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
+    """(the friction damper c that contact i carries over from the last step, whether it was
+    lowered): lowered where it would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
     the step starts from. Without this a contact that friction held at rest (c = Coulomb /
     SLIP_SPEED) and is then set sliding (a push, a kick, a velocity given between steps) starts
     the solve with a friction impulse c |u_t| millions of times Coulomb's: the first solve stops
@@ -321,7 +271,7 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     line while the surface turned under it); c |u_t| alone would read that as a kick, lower c
     at every step and need a second solve to restore it."""
     if kind[i] != CONTACT or damping == 0.0:
-        return damping
+        return damping, False
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
     u0, u1, u2 = (v[i, 0] + dv[i, 0] - surface[i, 0], v[i, 1] + dv[i, 1] - surface[i, 1],
                   v[i, 2] + dv[i, 2] - surface[i, 2])   # relative to the surface
@@ -336,8 +286,8 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     d = tangential_stiffness(pattern, blocks, normal, i)
     taken = damping * d / (damping + d) if d > 0.0 else damping
     if taken * slip > coulomb:
-        return coulomb / slip
-    return damping
+        return coulomb / slip, True
+    return damping, False
 
 
 @kernel
@@ -360,28 +310,34 @@ def coulomb_damping(pattern, blocks, normal, i, damping, slip, coulomb):
     d (its diagonal block across the normal, without friction) and damper c, the solve left it
     the tangential momentum p = (d + c) slip. Coulomb friction removes min(p, coulomb) of it:
     it slides on at (p - coulomb) / d > SLIP_SPEED with c = coulomb / slip, or it holds, with
-    c = coulomb / SLIP_SPEED."""
+    c = coulomb / SLIP_SPEED. Returns (c, SLIDING or HOLDING)."""
     stiffness = tangential_stiffness(pattern, blocks, normal, i) - damping
     momentum = (stiffness + damping) * slip
     sliding = (momentum - coulomb) / stiffness
     if sliding > SLIP_SPEED:
-        return coulomb / sliding
-    return coulomb / SLIP_SPEED
+        return coulomb / sliding, SLIDING
+    return coulomb / SLIP_SPEED, HOLDING
 
 
 @kernel
-def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal, surface,
-                    terrain, normal_floor, friction_damping, reaction, lookups):
+def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, slots, reaction, lookups):
     """One active-set pass (module doc), given the reaction impulses R = A ddv - b of the last
     solve and the step's ``lookups`` (find_constraints). Adjusts ddv, the matrix and the
-    right-hand side to every change. Returns whether another solve is needed: some contact came
-    or went, or the friction impulses (summed over all contacts) moved by more than
-    FRICTION_SETTLED of their total."""
+    right-hand side to every change, and writes what it decided for each particle into
+    ``slots.case``. Returns whether another solve is needed: some contact came or went, or the
+    friction impulses (summed over all contacts) moved by more than FRICTION_SETTLED of their
+    total."""
     changed = 0
     friction_total = friction_moved = 0.0
     terrains, epsilon = terrain_view(model), model.terrain_epsilon
+    # the particle loop reads its arrays as locals (a named tuple's field read inside it counts
+    # a reference at every particle)
+    kind, terrain, normal, surface, normal_floor, friction_damping, case = (
+        slots.kind, slots.terrain, slots.normal, slots.surface, slots.normal_floor,
+        slots.friction_damping, slots.case)
     swept = np.empty((1, lookups.shape[1], 4))   # a particle's lookups along its path
     for i in range(x.shape[0]):
+        case[i] = UNCHANGED
         if kind[i] == PINNED:
             continue
         u0, u1, u2 = (v[i, 0] + dv[i, 0] + ddv[i, 0], v[i, 1] + dv[i, 1] + ddv[i, 1],
@@ -396,9 +352,9 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
                 t, phi, nx, ny, nz, _ = closest_terrain(epsilon, lookups, i, u0, u1, u2, h, False)
             if t >= 0:
                 v_n = v[i, 0] * nx + v[i, 1] * ny + v[i, 2] * nz
-                make_contact(terrains, epsilon, x, i, t, phi, nx, ny, nz, v_n, h, kind, normal,
-                             surface, terrain, normal_floor)
+                make_contact(terrains, epsilon, x, i, t, (phi, nx, ny, nz, v_n), h, slots)
                 hold_constrained(i, kind, normal, normal_floor, v, dv, ddv)
+                case[i] = GROWN + t
                 changed += 1
             continue
         nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
@@ -407,13 +363,15 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
             kind[i] = FREE   # the terrain would have to pull
             set_friction_damping(i, 0.0, pattern, blocks, rhs, normal, surface, v, dv,
                                  friction_damping)
+            case[i] = RELEASED
             changed += 1
             continue
         u0, u1, u2 = u0 - surface[i, 0], u1 - surface[i, 1], u2 - surface[i, 2]   # relative
         u_n = u0 * nx + u1 * ny + u2 * nz
         slip = math.sqrt((u0 - u_n * nx) ** 2 + (u1 - u_n * ny) ** 2 + (u2 - u_n * nz) ** 2)
         coulomb = model.terrain_friction[terrain[i]] * impulse_n
-        damping = coulomb_damping(pattern, blocks, normal, i, friction_damping[i], slip, coulomb)
+        damping, case[i] = coulomb_damping(pattern, blocks, normal, i, friction_damping[i], slip,
+                                           coulomb)
         friction_total += coulomb
         friction_moved += abs(damping - friction_damping[i]) * max(slip, SLIP_SPEED)
         set_friction_damping(i, damping, pattern, blocks, rhs, normal, surface, v, dv,
@@ -422,11 +380,12 @@ def update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind, normal,
 
 
 @kernel
-def restore_impact_speeds(kind, normal, normal_floor, v_start, v_end):
+def restore_impact_speeds(kind, normal, normal_floor, v_start, v_end, restored):
     """Give every contact that hit its terrain this step (it started faster into it than its
     floor) its normal velocity from the start of the step back, for the impact pass to reflect;
-    its position already ends on the surface (module doc)."""
+    its position already ends on the surface (module doc). ``restored`` says which were."""
     for i in range(v_end.shape[0]):
+        restored[i] = False
         if kind[i] != CONTACT:
             continue
         nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
@@ -437,6 +396,7 @@ def restore_impact_speeds(kind, normal, normal_floor, v_start, v_end):
         if end > normal_floor[i] + 1e-12 * abs(normal_floor[i]) + 1e-12:
             continue   # the springs carried it off the surface: no impact to restore
         change = approach - end
+        restored[i] = True
         v_end[i, 0] += change * nx
         v_end[i, 1] += change * ny
         v_end[i, 2] += change * nz

@@ -30,8 +30,6 @@ solved by Jacobi-preconditioned conjugate gradients. Each further Newton iterati
 After each step come the collision pipeline and the divergence check every integrator runs
 (_steps.drive).
 """
-from typing import NamedTuple
-
 import numpy as np
 
 from .._jit import kernel
@@ -45,85 +43,25 @@ from ..collision.response.penalty import (linearize_contacts, newton_iterations_
                                           update_active_contacts)
 from ..collision.response.solve_friction import apply_contact_friction
 from ..errors import SceneError, require
-from ..forces import force_columns, spring_forces
+from ..forces import spring_forces
 from ..implicit.coarse import no_coarse_space
 from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
-from ..implicit.constraints import (find_constraints, hold_all_constrained, hold_constrained,
+from ..implicit.constraints import (CAPPED, UNCHANGED, find_constraints,
+                                    hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
                                     set_friction_damping, update_contacts)
 from ..implicit.jacobian import add_stiffness_product, assemble_diagonal_and_terms, particle_mass
 from ..implicit.pattern import build_solve_layout
-from ..implicit.spring_terms import spring_terms_like
-from ..state import ContactMemory
+from ..implicit.step_record import (no_record, note_end, note_part, note_pass, note_start,
+                                    note_step, note_try)
 from ..terms import add_external_jacobians, add_step_end_forces
 from ..world import aim_pins, move_world, step_end, step_time
 from .base import Integrator, KernelCall, register
-from ._steps import add_scaled, copy_positions, drive, drive_parts
+from ._implicit_arrays import (ImplicitState, Scratch, Settings, Statistics, contact_slots,
+                               copy_state, saved_state, workspace)
+from ._steps import add_scaled, drive, drive_parts
 
 MAX_CONTACT_UPDATES = 4   # re-solves after updating contacts and friction, per Newton iteration
-
-
-class ImplicitState(NamedTuple):
-    """What a backward Euler step advances, in place (state.State's arrays)."""
-
-    x: np.ndarray          # (P, 3) m: positions
-    v: np.ndarray          # (P, 3) m/s: velocities
-    memory: ContactMemory  # terrain contacts and the last velocity change
-
-
-class Settings(NamedTuple):
-    """The integrator's options (ImplicitEuler)."""
-
-    newton_iterations: int   # linearized solves a step asks for (contacts may ask for more)
-    tolerance: float         # each conjugate-gradient solve's relative residual
-    max_iterations: int      # the most conjugate-gradient iterations a solve takes
-
-
-class Statistics(NamedTuple):
-    """Running totals, for diagnostics (each a (1,) int64 array, added to in place)."""
-
-    cg_iterations: np.ndarray   # conjugate-gradient iterations
-    linear_solves: np.ndarray   # linear solves (several a Newton iteration when contacts change)
-    halvings: np.ndarray        # times a step or a part of one was cut in half
-
-    @classmethod
-    def zeros(cls) -> "Statistics":
-        return cls(np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(1, np.int64))
-
-
-class Workspace(NamedTuple):
-    """The arrays a step works in, allocated once a call (``workspace``)."""
-
-    blocks: np.ndarray     # (B, 3, 3): the stored blocks of A = M - h D - h^2 K
-    terms: tuple           # the springs' terms of A that are not stored (implicit/spring_terms.py)
-    force: np.ndarray      # (P, 3) N: the spring forces at the estimate
-    columns: np.ndarray    # the force kernel's columns (forces.force_columns)
-    rhs: np.ndarray        # (P, 3) N s: b, the right-hand side
-    dv: np.ndarray         # (P, 3) m/s: the step's velocity change so far
-    ddv: np.ndarray        # (P, 3) m/s: this Newton iteration's correction to it
-    x_k: np.ndarray        # (P, 3) m: the estimate's positions x + h (v + dv)
-    v_k: np.ndarray        # (P, 3) m/s: the estimate's velocities v + dv
-    normal: np.ndarray     # (P, 3): each constrained particle's terrain normal
-    surface: np.ndarray    # (P, 3) m/s: the velocity of its terrain's surface there (world.py)
-    reaction: np.ndarray   # (P, 3) N s: A ddv - b, the constraints' reaction impulses
-    r: np.ndarray          # (P, 3): conjugate gradients' residual
-    s: np.ndarray          # (P, 3): its search direction
-    c: np.ndarray          # (P, 3): its preconditioned residual
-    q: np.ndarray          # (P, 3): its products A s
-    lookups: np.ndarray    # (P, T, 4): each terrain's phi and normal at x (constraints.py)
-
-
-class Scratch(NamedTuple):
-    """What ``implicit_euler_step`` takes besides the state: the model's solve layout, the
-    settings, the work arrays and room for the state at a step's start and a part's."""
-
-    layout: tuple                # implicit/pattern.SolveLayout
-    settings: Settings
-    work: Workspace
-    solve_pairs: tuple           # collision/pair_lists.SolvePairList, kept between steps
-    statistics: Statistics
-    start: ImplicitState         # room for the state at the step's start
-    part: ImplicitState          # room for the state at the start of a part of the step
 
 
 # --- the method ---------------------------------------------------------------------------------
@@ -141,23 +79,29 @@ def backward_euler_step(model, state, scratch, h, pairs):
     # the constraints use the moving terrains where they are at the step's end (world.py)
     move_world(model, step_end(model, h))
     aim_pins(model, state.x, state.v, h)   # moving pins: to their paths' points at the end
+    slots = contact_slots(state, work)
     contacts, own, pairs = find_step_contacts(model, state, scratch.solve_pairs, work, h, pairs)
+    note_start(scratch.record, slots)
     start_estimate(state, work)
     needed = newton_iterations_needed(model, contacts, state.v, h, settings.newton_iterations)
     newton = redone = 0
     while newton < needed:
         assemble_system(model, scratch.layout, state, work, contacts, h, newton == 0)
-        solve_with_contacts(model, scratch, state, contacts, h, newton == 0)
+        if newton == 0:   # the carried dampers it capped
+            note_pass(scratch.record, slots)
+        updates, solves = solve_with_contacts(model, scratch, state, contacts, h, newton == 0)
+        grew = False
         if redone < MOST_OWN_REDOS and any_self_collision(model):
             grew, own, pairs = own_pairs_met(model, state, work, h, own, pairs, newton == 0)
-            if grew:   # solve this iteration again, from where it started, with them
-                contacts = find_solve_contacts(model, state.x, state.v, h, scratch.solve_pairs,
-                                               own)
-                redone += 1
-                continue
+        note_try(scratch.record, updates, solves, grew)
+        if grew:   # solve this iteration again, from where it started, with them
+            contacts = find_solve_contacts(model, state.x, state.v, h, scratch.solve_pairs, own)
+            redone += 1
+            continue
         update_estimate(state, work, work.ddv, h)
         newton += 1
     end_step(model, state, work, contacts, h)
+    note_end(scratch.record, work.restored)
     return pairs
 
 
@@ -166,9 +110,8 @@ def find_step_contacts(model, state, solve_pairs, work, h, pairs):
     """The step's constraints (pins, terrain contacts: into the state's memory and
     ``work.normal``) and its contact set; returns (the contact set, a self-colliding body's own
     pairs in contact at x, the post-step list at x)."""
-    x, v, memory = state
-    find_constraints(model, x, v, h, memory.kind, work.normal, work.surface, memory.terrain,
-                     memory.normal_floor, memory.friction_damping, work.lookups)
+    x, v = state.x, state.v
+    find_constraints(model, x, v, h, contact_slots(state, work), work.lookups)
     own, pairs = own_pairs_touching(model, x, pairs)
     contacts = find_solve_contacts(model, x, v, h, solve_pairs, own)
     return contacts, own, pairs
@@ -208,14 +151,19 @@ def assemble_system(model, layout, state, work, contacts, h, first):
                                              work.dv, work.ddv)
     kind, terrain, floor, friction = (memory.kind, memory.terrain, memory.normal_floor,
                                       memory.friction_damping)
+    case = work.case
     ddv[:] = 0.0
     for i in range(x.shape[0]):
         hold_constrained(i, kind, normal, floor, v, dv, ddv)
         damping = friction[i]   # the fresh matrix has none yet
         friction[i] = 0.0
+        case[i] = UNCHANGED
         if first:   # carried from the last step: back inside the friction cone
-            damping = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain,
-                                                  normal, surface, v, dv, ddv, damping)
+            damping, capped = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind,
+                                                          terrain, normal, surface, v, dv, ddv,
+                                                          damping)
+            if capped:
+                case[i] = CAPPED
         if damping != 0.0:   # (a call that would change nothing still counts its arrays)
             set_friction_damping(i, damping, pattern, blocks, rhs, normal, surface, v, dv,
                                  friction)
@@ -243,7 +191,8 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
     (implicit/constraints.py) and the penalty contacts' active set (collision/response/penalty.py)
     between solves, MAX_CONTACT_UPDATES times at most. The first solve of a step starts along the
     last step's velocity change (cg.mass_start says why; the solution is the same to the
-    tolerance); later Newton iterations solve for a correction, for which it is no guess."""
+    tolerance); later Newton iterations solve for a correction, for which it is no guess.
+    Returns (the update passes, the solves) it took; each pass's decisions go to the record."""
     x, v, memory = state
     work, settings, statistics = scratch.work, scratch.settings, scratch.statistics
     pattern, blocks, terms, rhs, dv, ddv = (scratch.layout.diagonal, work.blocks, work.terms,
@@ -260,13 +209,15 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
     conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
+    slots = contact_slots(state, work)
+    updates = 0
     for update in range(MAX_CONTACT_UPDATES):
         system_multiply(pattern, blocks, terms, contacts, ddv, q)
         add_scaled(work.reaction, q, -1.0, rhs)
-        terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, kind,
-                                          normal, work.surface, memory.terrain, normal_floor,
-                                          memory.friction_damping, work.reaction,
-                                          work.lookups)
+        terrain_changed = update_contacts(model, pattern, blocks, rhs, x, v, dv, ddv, h, slots,
+                                          work.reaction, work.lookups)
+        note_pass(scratch.record, slots)
+        updates += 1
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
             break
@@ -279,6 +230,7 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
         solves += 1
     statistics.cg_iterations[0] += iterations
     statistics.linear_solves[0] += solves
+    return updates, solves
 
 
 @kernel
@@ -308,7 +260,8 @@ def end_step(model, state, work, contacts, h):
         add_scaled(work.x_k, x, h, work.v_k)
     x[:] = work.x_k
     memory.velocity_change[:] = work.dv
-    restore_impact_speeds(memory.kind, work.normal, memory.normal_floor, v, work.v_k)
+    restore_impact_speeds(memory.kind, work.normal, memory.normal_floor, v, work.v_k,
+                          work.restored)
     v[:] = work.v_k
 
 
@@ -321,6 +274,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     the same way (collision/ccd/crossing_check.py), down to 1 / 2^MOST_HALVINGS of the step; after
     a half that passes, steps grow back. Where even the shortest part crosses, the step is taken
     whole, as without the check."""
+    note_step(scratch.record)
     if model.surface_triangles.shape[0] == 0:
         return backward_euler_step(model, state, scratch, h, pairs)
     step_start = step_time(model)   # each part's own start time, for the moving terrains
@@ -342,6 +296,7 @@ def implicit_euler_step(model, state, scratch, h, pairs):
             copy_state(state, saved)   # back to the part's start, to go again in halves
             size //= 2
             scratch.statistics.halvings[0] += 1
+            note_part(scratch.record)
             continue
         pairs = stepped
         done += size
@@ -355,52 +310,17 @@ def implicit_euler_step(model, state, scratch, h, pairs):
     return pairs
 
 
-@kernel
-def saved_state(state):
-    """Room for a copy of ``state`` (an ImplicitState)."""
-    memory = state.memory
-    return ImplicitState(state.x.copy(), state.v.copy(),
-                         ContactMemory(memory.kind.copy(), memory.terrain.copy(),
-                                       memory.normal_floor.copy(), memory.friction_damping.copy(),
-                                       memory.velocity_change.copy()))
-
-
-@kernel
-def copy_state(out, state):
-    """Copy ``state`` into ``out`` (one like it: saved_state), in place."""
-    copy_positions(out.x, state.x)
-    copy_positions(out.v, state.v)
-    copy_positions(out.memory.velocity_change, state.memory.velocity_change)
-    memory, saved = state.memory, out.memory
-    for i in range(memory.kind.shape[0]):
-        saved.kind[i] = memory.kind[i]
-        saved.terrain[i] = memory.terrain[i]
-        saved.normal_floor[i] = memory.normal_floor[i]
-        saved.friction_damping[i] = memory.friction_damping[i]
-
-
 # --- the driver ---------------------------------------------------------------------------------
 
 @kernel
-def workspace(layout, x, terrain_count):
-    """The arrays a step works in (Workspace), for a model of ``terrain_count`` terrains."""
-    blocks = np.empty((layout.diagonal.column.shape[0], 3, 3))
-    vectors = [np.zeros_like(x) for _ in range(13)]
-    terms = spring_terms_like(layout.runs, layout.run_entries, layout.loose_pairs, x)
-    return Workspace(blocks, terms, vectors[0], force_columns(x), vectors[1], vectors[2],
-                     vectors[3], vectors[4], vectors[5], vectors[6], vectors[7], vectors[8],
-                     vectors[9], vectors[10], vectors[11], vectors[12],
-                     np.empty((x.shape[0], terrain_count, 4)))
-
-
-@kernel
-def advance(model, layout, settings, state, solve_pairs, statistics, h, steps, pairs):
+def advance(model, layout, settings, state, solve_pairs, statistics, h, steps, pairs, record):
     """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
     done, first diverged particle or -1, the post-step pass's pair list: _steps.drive).
-    ``solve_pairs`` is the solve's own surface pair list (a SolvePairList), changed in place."""
+    ``solve_pairs`` is the solve's own surface pair list (a SolvePairList), changed in place;
+    ``record`` (implicit/step_record.py) keeps the last step's decisions where it has room."""
     work = workspace(layout, state.x, model.terrain_epsilon.shape[0])
     scratch = Scratch(layout, settings, work, solve_pairs, statistics, saved_state(state),
-                      saved_state(state))
+                      saved_state(state), record)
     return drive(implicit_euler_step, model, state, scratch, h, steps, pairs)
 
 
@@ -437,6 +357,7 @@ class ImplicitEuler(Integrator):
         self.cg_tolerance = float(cg_tolerance)
         self.cg_max_iterations = int(cg_max_iterations)
         self.statistics = Statistics.zeros()   # running totals, for diagnostics
+        self.record = None   # a StepRecord the steps write their decisions to (``recording``)
 
     def pattern(self, model):
         """What the solve needs of the model (pattern.SolveLayout), built on first use and kept
@@ -468,7 +389,8 @@ class ImplicitEuler(Integrator):
         return KernelCall(advance, (
             model.arrays, self.solve_layout(model), settings,
             ImplicitState(state.positions, state.velocities, state.contacts), _solve_pairs(state),
-            self.statistics, float(dt), int(steps), state.pairs))
+            self.statistics, float(dt), int(steps), state.pairs,
+            no_record() if self.record is None else self.record))
 
     def variants(self, model, state, dt):
         # one kernel: no threaded twin, and both preconditioners' layouts have the same types
