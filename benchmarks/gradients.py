@@ -128,7 +128,9 @@ def parts() -> None:
     work = np.empty((17, len(x), 3))
     layout = run_layout(p.a, p.b)
     table = run_kernels.entry_table(layout, p.ks, p.kd, p.rest)
-    loose = tuple(values[layout.loose] for values in (p.a, p.b, p.ks, p.kd, p.rest))
+    loose = kernels.Springs(*(values[layout.loose] for values in (p.a, p.b, p.ks, p.kd, p.rest)))
+    particles = run_kernels.Particles(p.inv_mass, p.drag, p.gravity)
+    bars = run_kernels.StepBars(bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity)
     columns = np.empty((run_kernels.ROWS, len(x)))
     kept = np.empty((1, 4, len(x), 3))
     simulation.step_keeping(kept, np.empty((1, 2, len(x), 3)))
@@ -137,17 +139,15 @@ def parts() -> None:
         "forward rk4 step": lambda: simulation.step(1),
         "force loop": lambda: kernels.add_spring_forces(p.a, p.b, p.ks, p.kd, p.rest, x, v,
                                                         force),
-        "force VJP": lambda: kernels.add_spring_forces_vjp(p.a, p.b, p.ks, p.kd, p.rest, x, v, g,
-                                                           x_bar, v_bar, bar.ks, bar.kd,
-                                                           bar.rest),
+        "force VJP": lambda: kernels.add_spring_forces_vjp(
+            kernels.Springs(p.a, p.b, p.ks, p.kd, p.rest), x, v, g, x_bar, v_bar,
+            kernels.SpringBars(bar.ks, bar.kd, bar.rest)),
         "rk4 step adjoint": lambda: run_kernels.rk4_step_vjp(
-            layout, table, loose, (p.inv_mass, p.drag, p.gravity), options["dt"], x, v, x_bar,
-            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns,
-            np.empty((0, len(x), 3))),
+            layout, table, loose, particles, options["dt"], (x, v), (x_bar, v_bar), bars, work,
+            columns, np.empty((0, len(x), 3))),
         "the same, the stages kept": lambda: run_kernels.rk4_step_vjp(
-            layout, table, loose, (p.inv_mass, p.drag, p.gravity), options["dt"], x, v, x_bar,
-            v_bar, (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), work, columns,
-            kept),
+            layout, table, loose, particles, options["dt"], (x, v), (x_bar, v_bar), bars, work,
+            columns, kept),
     }
     print(f"cube: {len(x)} particles, {len(p.a)} springs")
     for _ in range(3):

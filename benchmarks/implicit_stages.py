@@ -58,8 +58,9 @@ def solve(timer, model, scratch, state, contacts, h):
     work, settings, layout = scratch.work, scratch.settings, scratch.layout
     pattern, kind, normal, floor = layout.diagonal, memory.kind, work.normal, memory.normal_floor
     system = (pattern, work.blocks, work.terms, contacts)
-    timer("first guess", cg.mass_start, *system, work.rhs, kind, normal, model.inv_mass,
-          memory.velocity_change, work.ddv, work.r, work.s, work.q)
+    timer("first guess", cg.mass_start, cg.FilteredSystem(*system, layout.coarse, kind, normal),
+          work.rhs, model.inv_mass, memory.velocity_change, work.ddv,
+          cg.CGWork(work.r, work.s, work.c, work.q))
     reference, log = 0.0, []
     released = joined = 0
     friction = 0.0
@@ -79,9 +80,10 @@ def solve(timer, model, scratch, state, contacts, h):
             if not changed:
                 break
         iterations, reference = timer(
-            "conjugate gradients", cg.contact_cg, *system, layout.coarse, work.rhs, kind,
-            normal, work.ddv, settings.tolerance, settings.max_iterations, reference, work.r,
-            work.s, work.c, work.q)
+            "conjugate gradients", cg.contact_cg,
+            cg.FilteredSystem(*system, layout.coarse, kind, normal), work.rhs, work.ddv,
+            settings.tolerance, settings.max_iterations, reference,
+            cg.CGWork(work.r, work.s, work.c, work.q))
         cg.conserve_momentum(*system, work.rhs, kind, work.ddv, work.q)
         constraints.hold_all_constrained(kind, normal, floor, v, work.dv, work.ddv)
         log.append((iterations, released, joined, friction))

@@ -14,7 +14,7 @@ from springsim.bodies.cloth import Cloth
 from springsim.bodies.cloth_material import ClothMaterial
 from springsim.bodies.cube import Cube
 from springsim.collision.contact_sets.solve import no_contacts
-from springsim.implicit.cg import filtered_cg, search_product
+from springsim.implicit.cg import CGWork, filtered_cg, search_product
 from springsim.implicit.constraints import CONTACT, FREE, PINNED, SLIP_SPEED
 from springsim.implicit.jacobian import assemble_diagonal_and_terms, assemble_system
 from springsim.implicit.pattern import build_block_pattern, build_solve_layout
@@ -133,7 +133,7 @@ def test_cg_meets_the_requested_residual_and_agrees_with_a_direct_solve(toleranc
     normal = np.zeros((count, 3))
     u = np.zeros((count, 3))
     work = [np.zeros((count, 3)) for _ in range(4)]
-    filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, 1000, 0.0, *work)
+    filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, 1000, CGWork(*work))
 
     matrix = scipy.sparse.bsr_matrix((blocks, pattern.column, pattern.row_start)).tocsr()
     free = np.repeat(kind == FREE, 3)
@@ -208,7 +208,7 @@ def test_cg_leaves_the_normal_components_of_contacts_where_they_start():
     start = rng.standard_normal((count, 3))
     u = start.copy()
     work = [np.zeros((count, 3)) for _ in range(4)]
-    filtered_cg(pattern, blocks, b, kind, normal, u, 1e-10, 1000, 0.0, *work)
+    filtered_cg(pattern, blocks, b, kind, normal, u, 1e-10, 1000, CGWork(*work))
 
     contact = kind == CONTACT
     assert np.allclose(np.einsum("ij,ij->i", u - start, normal)[contact], 0.0, atol=1e-12)
@@ -238,8 +238,8 @@ def test_cg_has_nothing_to_solve_for_a_load_the_constraints_carry():
     b = np.where((kind == CONTACT)[:, None], rng.uniform(0.1, 1.0, (count, 1)) * normal, 0.0)
     u = np.zeros((count, 3))
     work = [np.zeros((count, 3)) for _ in range(4)]
-    iterations, reference = filtered_cg(pattern, blocks, b, kind, normal, u, 1e-5, 1000, 0.0,
-                                        *work)
+    iterations, reference = filtered_cg(pattern, blocks, b, kind, normal, u, 1e-5, 1000,
+                                        CGWork(*work))
     assert iterations == 0
     assert reference == pytest.approx(np.linalg.norm(b))
     assert np.all(u == 0.0)

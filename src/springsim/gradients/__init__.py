@@ -7,7 +7,8 @@ step the simulation took (docs/guide/gradients.md).
 The pieces, one concern a file:
 - ``physics.py``: the forces and the implicit system in NumPy, and their vector-Jacobian products;
   ``wind.py`` and ``pins.py`` the moving world's forces, ``attachments.py`` the bindings
-  between bodies, ``contact.py``, ``terrain_shapes.py`` and ``implicit_contact.py`` terrain
+  between bodies, ``contact.py``, ``terrain_shapes.py``, ``implicit_replay.py`` (backward
+  Euler's step as its record says it went) and ``implicit_contact.py`` (its adjoint) terrain
   contact, ``clock.py`` the time each force is taken at;
 - ``adjoints.py``: the adjoint of each integrator's step, registered by the integrator's name;
 - ``solve.py``: backward Euler's Newton iterations and the adjoint solve of each;

@@ -25,7 +25,8 @@ from .body_contact import check_replayed, far_from_bodies, respond
 from .body_contact_adjoint import respond_vjp
 from .contact import (contact_accelerations, contact_accelerations_vjp, far_from_terrains,
                       far_steps, impacts, impacts_vjp)
-from .run_kernels import ROWS, entry_table, rk4_step_vjp
+from .kernels import Springs
+from .run_kernels import ROWS, Particles, StepBars, entry_table, rk4_step_vjp
 from .physics import (accelerations, accelerations_vjp, step_accelerations,
                       step_accelerations_vjp)
 from .implicit_bodies import (PenaltyStep, adjoint as bodies_adjoint, check_solved,
@@ -146,8 +147,8 @@ class Runs(NamedTuple):
     physical: object
     layout: object
     table: np.ndarray
-    loose: tuple
-    particles: tuple
+    loose: Springs
+    particles: Particles
     plain: bool
 
     @classmethod
@@ -157,9 +158,9 @@ class Runs(NamedTuple):
         # hard bindings are no term but are held between the stages: not plain either
         plain = not (any_acts(physical) or len(physical.attachment_nodes))
         return cls(physical, layout, entry_table(layout, physical.ks, physical.kd, physical.rest),
-                   (physical.a[loose], physical.b[loose], physical.ks[loose], physical.kd[loose],
-                    physical.rest[loose]),
-                   (physical.inv_mass, physical.drag, physical.gravity), plain)
+                   Springs(physical.a[loose], physical.b[loose], physical.ks[loose],
+                           physical.kd[loose], physical.rest[loose]),
+                   Particles(physical.inv_mass, physical.drag, physical.gravity), plain)
 
 
 @register_adjoint
@@ -273,9 +274,10 @@ class RK4Adjoint(ExplicitAdjoint):
         runs = self.runs
         x_bar, v_bar = x_bar.copy(), v_bar.copy()
         release(physical, x_bar, v_bar)
-        rk4_step_vjp(runs.layout, runs.table, runs.loose, runs.particles, h, x, v, x_bar, v_bar,
-                     (bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity), self.work,
-                     self.columns, kept)
+        rk4_step_vjp(runs.layout, runs.table, runs.loose, runs.particles, h, (x, v),
+                     (x_bar, v_bar),
+                     StepBars(bar.ks, bar.kd, bar.rest, bar.mass, bar.drag, bar.gravity),
+                     self.work, self.columns, kept)
         release(physical, x_bar, v_bar)
         return x_bar, v_bar
 

@@ -4,13 +4,14 @@ run (``check_contact_free``), each a one-line SceneError.
 Covered: every integrator (adjoints.py), springs,
 dampers, gravity, drag, the wind on surfaces and balls (wind.py), pins that hold, move or are
 soft (pins.py) and attachments, soft or hard (attachments.py); contact with planes, spheres,
-bowls and meshes, still, moving rigidly or deforming (contact.py, implicit_contact.py); body-body
+bowls and meshes, still, moving rigidly or deforming (contact.py, implicit_replay.py and
+implicit_contact.py); body-body
 contact of surfaces (a self-colliding body's own too) and of balls with balls and particles under
 every integrator (body_contact.py, implicit_bodies.py). Not yet covered under implicit_euler, so
 refused at that step rather than given a gradient that leaves a force out: a contact that a
 solve's update sweeps onto a deforming mesh's edge or corner from beyond its reach
-(implicit_lookup.py), and a particle let go and taken again within a step with another
-terrain, normal or floor (implicit_contact.py). A terrain the adjoint does not
+(implicit_lookup.py), a particle let go and taken again within a step on another terrain
+(implicit_replay.py), and a step the forward cut into parts. A terrain the adjoint does not
 follow may be in the scene as long as no particle comes within its contact band during the
 run (``contact_check``).
 """

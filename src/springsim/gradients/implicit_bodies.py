@@ -30,7 +30,7 @@ an iteration's solve brings into contact, after which the forward solves that it
 with them, as ``PenaltyStep.regrow`` does), and a ball's contacts with a particle, a sheet
 triangle (at its closest point, or at its centre and corners where the ball is larger than it)
 or another ball, with the ball's friction after the solve (none between two balls). In a step
-in which particles also touch a terrain, the terrain replay (implicit_contact.py) takes the
+in which particles also touch a terrain, the terrain replay (implicit_replay.py) takes the
 contacts beside its constraints through ``PenaltyStep``, and takes an iteration again for grown
 own pairs as this replay does (implicit_contact.Iteration.again).
 """
@@ -339,7 +339,7 @@ def linearization_vjp(physical, contacts, x, v, dv, h, bars, x_bar, bar):
     return estimate_bar
 
 
-# ---- with terrain contact in the same step (implicit_contact.py's replay takes these) -----------
+# ---- with terrain contact in the same step (implicit_replay.py takes these) --------------------
 
 def own_pairs_at(bodies, x):
     """(a self-colliding body's own pairs in contact at x, the post-step pair list they came
@@ -352,7 +352,7 @@ def own_pairs_at(bodies, x):
 
 
 class PenaltyStep:
-    """A step's penalty contacts as the terrain replay (implicit_contact.replay) takes them,
+    """A step's penalty contacts as the terrain replay (implicit_replay.replay) takes them,
     beside its constraints: the contact set, linearized each Newton iteration, its matrix and
     right-hand side for the active set of each solve, and its friction after the solve."""
 

@@ -338,7 +338,8 @@ def update_adjoint(physical, h, estimate, matrix, constraints, update, u0, ddv, 
     matrix_vjp(physical, h, estimate, ddv, g_r, bars.estimate, bars.parameters)
     bars.b[...] -= g_r
     # stiffness = (tr B - n^T B n) / 2
-    bars.weights[index] += 0.5 * stiff_bar[:, None, None] * (np.eye(3) - n[:, :, None] * n[:, None, :])
+    bars.weights[index] += (0.5 * stiff_bar[:, None, None]
+                            * (np.eye(3) - n[:, :, None] * n[:, None, :]))
     if bars.held.normal is not None:   # impulse = n . R, u_t = (I - n n^T) u, n^T B n
         bars.held.normal[index] += (
             impulse_bar[:, None] * update.reaction

@@ -1,6 +1,6 @@
-"""How backward Euler's contact replay (implicit_contact.py) sees the terrains: once per step, at
-the step's start positions, each terrain where the step's end has it (terrain_lookups.closest_terrain
-in the forward), whichever solve asks.
+"""How backward Euler's contact replay (implicit_replay.py) sees the terrains: once per step, at
+the step's start positions, each terrain where the step's end has it (the forward's
+terrain_lookups.closest_terrain), whichever solve asks.
 
 A deforming mesh's grid sees a point only within its reach (terrains/deforming_mesh.py): beyond,
 the forward's lookup answers infinity and asks points y = x + sigma u along the step's path

@@ -8,8 +8,38 @@ order, one thread: the sums are the same bits whatever the thread count (issue 3
 determinism). A spring of zero length has no force and passes no gradient, as in the forward.
 """
 import math
+from typing import NamedTuple
+
+import numpy as np
 
 from .._jit import kernel
+
+
+class Springs(NamedTuple):
+    """Springs' ends and parameters, one entry per spring (physics.Physical's, or those of the
+    springs in no run: run_kernels.py)."""
+
+    a: np.ndarray      # (S,) int64: first particle
+    b: np.ndarray      # (S,) int64: second particle
+    ks: np.ndarray     # (S,) N/m
+    kd: np.ndarray     # (S,) N s/m
+    rest: np.ndarray   # (S,) m
+
+
+class SpringBars(NamedTuple):
+    """The cotangents of the springs' parameters, added to."""
+
+    ks: np.ndarray
+    kd: np.ndarray
+    rest: np.ndarray
+
+
+class Scales(NamedTuple):
+    """What ``add_system_springs_vjp``'s terms are scaled by: (-h^2, h) for the system's
+    springs, (1, 0) for the stiffness product."""
+
+    stiffness: float
+    damping: float
 
 
 @kernel
@@ -33,8 +63,11 @@ def add_spring_forces(a, b, ks, kd, rest, x, v, out):
 
 
 @kernel
-def add_spring_forces_vjp(a, b, ks, kd, rest, x, v, g, x_bar, v_bar, ks_bar, kd_bar, rest_bar):
-    """Add g . d(spring forces)/d(x, v, ks, kd, rest) (physics.spring_forces_vjp)."""
+def add_spring_forces_vjp(springs, x, v, g, x_bar, v_bar, bars):
+    """Add g . d(spring forces)/d(x, v, ks, kd, rest) (physics.spring_forces_vjp); ``springs``
+    a Springs, ``bars`` a SpringBars."""
+    a, b, ks, kd, rest = springs.a, springs.b, springs.ks, springs.kd, springs.rest
+    ks_bar, kd_bar, rest_bar = bars.ks, bars.kd, bars.rest
     for s in range(a.shape[0]):
         i, j = a[s], b[s]
         dx, dy, dz = x[i, 0] - x[j, 0], x[i, 1] - x[j, 1], x[i, 2] - x[j, 2]
@@ -103,13 +136,15 @@ def add_stiffness_product(a, b, ks, rest, x, u, scale, out):
 
 
 @kernel
-def add_system_springs_vjp(a, b, ks, kd, rest, x, u, g, h, stiffness_scale, damping_scale,
-                           x_bar, u_bar, ks_bar, kd_bar, rest_bar):
+def add_system_springs_vjp(springs, x, u, g, scales, x_bar, u_bar, bars):
     """Add g . d[the springs' terms applied to u]/d(x, u, ks, kd, rest), where a spring's term on
-    particle a is  damping_scale kd (l . u_s) l + stiffness_scale (dF/dx) u_s:
+    particle a is  damping_scale kd (l . u_s) l + stiffness_scale (dF/dx) u_s (``scales``):
     damping_scale = h, stiffness_scale = -h^2 gives the system's springs (A = M + ... - h^2
     dF/dx), damping_scale = 0, stiffness_scale = 1 the stiffness product. ``u_bar`` may be
-    empty (u held fixed)."""
+    empty (u held fixed); ``springs`` a Springs, ``bars`` a SpringBars."""
+    a, b, ks, kd, rest = springs.a, springs.b, springs.ks, springs.kd, springs.rest
+    ks_bar, kd_bar, rest_bar = bars.ks, bars.kd, bars.rest
+    stiffness_scale, damping_scale = scales.stiffness, scales.damping
     with_u = u_bar.shape[0] > 0
     for s in range(a.shape[0]):
         i, j = a[s], b[s]

@@ -344,11 +344,20 @@ def spring_forces(physical: Physical, x, v) -> np.ndarray:
     return out
 
 
+def springs_of(physical: Physical) -> "kernels.Springs":
+    """The model's springs as the kernels take them."""
+    return kernels.Springs(physical.a, physical.b, physical.ks, physical.kd, physical.rest)
+
+
+def spring_bars(bar: "Cotangents") -> "kernels.SpringBars":
+    """The springs' parameter cotangents of ``bar``, as the kernels add to them."""
+    return kernels.SpringBars(bar.ks, bar.kd, bar.rest)
+
+
 def spring_forces_vjp(physical: Physical, x, v, g, x_bar, v_bar, bar: Cotangents) -> None:
     """reference_spring_forces_vjp, in a kernel."""
-    kernels.add_spring_forces_vjp(physical.a, physical.b, physical.ks, physical.kd,
-                                  physical.rest, x, v, np.ascontiguousarray(g), x_bar, v_bar,
-                                  bar.ks, bar.kd, bar.rest)
+    kernels.add_spring_forces_vjp(springs_of(physical), x, v, np.ascontiguousarray(g), x_bar,
+                                  v_bar, spring_bars(bar))
 
 
 def stiffness_product(physical: Physical, x, u) -> np.ndarray:
@@ -361,17 +370,15 @@ def stiffness_product(physical: Physical, x, u) -> np.ndarray:
 
 def stiffness_product_vjp(physical: Physical, x, u, g, x_bar, u_bar, bar: Cotangents) -> None:
     """reference_stiffness_product_vjp, in a kernel."""
-    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
-                                   physical.rest, x, np.ascontiguousarray(u),
-                                   np.ascontiguousarray(g), 0.0, 1.0, 0.0, x_bar, u_bar, bar.ks,
-                                   bar.kd, bar.rest)
+    kernels.add_system_springs_vjp(springs_of(physical), x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), kernels.Scales(1.0, 0.0), x_bar,
+                                   u_bar, spring_bars(bar))
 
 
 def system_product_vjp(physical: Physical, x, u, g, h, x_bar, bar: Cotangents) -> None:
     """reference_system_product_vjp, the springs in a kernel."""
     bar.mass += np.where(physical.free, dot(g, u), 0.0)
     bar.drag += h * dot(g, u)
-    kernels.add_system_springs_vjp(physical.a, physical.b, physical.ks, physical.kd,
-                                   physical.rest, x, np.ascontiguousarray(u),
-                                   np.ascontiguousarray(g), h, -h * h, h, x_bar,
-                                   np.empty((0, 3)), bar.ks, bar.kd, bar.rest)
+    kernels.add_system_springs_vjp(springs_of(physical), x, np.ascontiguousarray(u),
+                                   np.ascontiguousarray(g), kernels.Scales(-h * h, h), x_bar,
+                                   np.empty((0, 3)), spring_bars(bar))

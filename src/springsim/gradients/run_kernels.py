@@ -15,16 +15,36 @@ The columns (``cols``, ROWS x P) hold, by rows: positions, velocities, the cotan
 forces, the springs' force, two blocks of scratch and the cotangents of x and v.
 """
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import inline_kernel, kernel
 from ..spring_runs import RunLayout
-from .kernels import add_spring_forces, add_spring_forces_vjp
+from .kernels import SpringBars, add_spring_forces, add_spring_forces_vjp
 
 X, V, G, FORCE, PUSH, DAMP, X_BAR, V_BAR = range(0, 24, 3)   # first rows of each block
 ROWS = 24
 KS, KD, REST, KS_BAR, KD_BAR, REST_BAR = range(6)                    # rows of the entry table
+
+
+class Particles(NamedTuple):
+    """What the RK4 step adjoint takes of the particles."""
+
+    inv_mass: np.ndarray   # (P,) 1/kg, 0 for a pinned particle
+    drag: np.ndarray       # (P,) N s/m
+    gravity: np.ndarray    # (3,) m/s^2
+
+
+class StepBars(NamedTuple):
+    """The parameters' cotangents the RK4 step adjoint adds to (physics.Cotangents')."""
+
+    ks: np.ndarray
+    kd: np.ndarray
+    rest: np.ndarray
+    mass: np.ndarray
+    drag: np.ndarray
+    gravity: np.ndarray
 
 
 def entry_table(layout: RunLayout, ks, kd, rest) -> np.ndarray:
@@ -143,7 +163,7 @@ def to_rows(cols, first, values):
 @inline_kernel
 def stage_accelerations(runs, table, loose, particles, x, v, cols, force, out):
     """out = dv/dt at (x, v) before contact (physics.accelerations), ``force`` the springs'."""
-    inv_mass, drag, gravity = particles
+    inv_mass, drag, gravity = particles.inv_mass, particles.drag, particles.gravity
     to_rows(cols, X, x)
     to_rows(cols, V, v)
     cols[FORCE:FORCE + 3] = 0.0
@@ -154,7 +174,7 @@ def stage_accelerations(runs, table, loose, particles, x, v, cols, force, out):
     for i in range(x.shape[0]):
         for c in range(3):
             force[i, c] = cols[FORCE + c, i]
-    add_spring_forces(loose[0], loose[1], loose[2], loose[3], loose[4], x, v, force)
+    add_spring_forces(loose.a, loose.b, loose.ks, loose.kd, loose.rest, x, v, force)
     for i in range(x.shape[0]):
         w = inv_mass[i]
         for c in range(3):
@@ -169,28 +189,27 @@ def table_rows(table, start, count):
 
 
 @kernel
-def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, work, cols,
-                 kept):
-    """The adjoint of one RK4 step without contact (adjoints.RK4Adjoint): (x_bar, v_bar) at
-    the step's start, in place of those at its end. ``layout`` (runs, entry_spring, loose
-    spring numbers), ``table`` (entry_table), ``loose`` (a, b, ks, kd, rest) of the springs in no
-    run, ``particles`` (inv_mass, drag, gravity), ``bars`` (ks, kd, rest, mass, drag, gravity)
-    the parameters' cotangents, added to; ``work`` 17 (P, 3) arrays; ``cols`` (ROWS, P);
-    ``kept`` the stages' accelerations as the forward computed them (4, P, 3: tape.py), or no
-    rows, and then they are evaluated again here."""
-    runs, entry_spring, loose_springs = layout
-    loose_bars = (np.zeros(loose_springs.shape[0]), np.zeros(loose_springs.shape[0]),
-                  np.zeros(loose_springs.shape[0]))
+def rk4_step_vjp(layout, table, loose, particles, h, start, start_bar, bars, work, cols, kept):
+    """The adjoint of one RK4 step without contact (adjoints.RK4Adjoint) from ``start`` (x, v):
+    ``start_bar`` (x_bar, v_bar) at the step's start, in place of those at its end. ``layout``
+    (a RunLayout), ``table`` (entry_table), ``loose`` (kernels.Springs) the springs in no run,
+    ``particles`` (Particles), ``bars`` (StepBars) the parameters' cotangents, added to;
+    ``work`` 17 (P, 3) arrays; ``cols`` (ROWS, P); ``kept`` the stages' accelerations as the
+    forward computed them (4, P, 3: tape.py), or no rows, and then they are evaluated again
+    here."""
+    runs, entry_spring, loose_springs = layout.runs, layout.entry_spring, layout.loose
+    count = loose_springs.shape[0]
+    loose_bars = SpringBars(np.zeros(count), np.zeros(count), np.zeros(count))
     table[KS_BAR:REST_BAR + 1] = 0.0
     if kept.shape[0] == 4:
-        stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, kept, x_bar, v_bar, bars,
+        stages_vjp(runs, table, loose, loose_bars, particles, h, start, kept, start_bar, bars,
                    work, cols)
     else:
         acc = work[12:16]
-        evaluate_stages(runs, table, loose, particles, h, x, v, work, cols, acc)
-        stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v_bar, bars,
+        evaluate_stages(runs, table, loose, particles, h, start, work, cols, acc)
+        stages_vjp(runs, table, loose, loose_bars, particles, h, start, acc, start_bar, bars,
                    work, cols)
-    ks_bar, kd_bar, rest_bar = bars[0], bars[1], bars[2]
+    ks_bar, kd_bar, rest_bar = bars.ks, bars.kd, bars.rest
     for e in range(entry_spring.shape[0]):
         s = entry_spring[e]
         if s >= 0:
@@ -199,14 +218,15 @@ def rk4_step_vjp(layout, table, loose, particles, h, x, v, x_bar, v_bar, bars, w
             rest_bar[s] += table[REST_BAR, e]
     for j in range(loose_springs.shape[0]):
         s = loose_springs[j]
-        ks_bar[s] += loose_bars[0][j]
-        kd_bar[s] += loose_bars[1][j]
-        rest_bar[s] += loose_bars[2][j]
+        ks_bar[s] += loose_bars.ks[j]
+        kd_bar[s] += loose_bars.kd[j]
+        rest_bar[s] += loose_bars.rest[j]
 
 
 @inline_kernel
-def evaluate_stages(runs, table, loose, particles, h, x, v, work, cols, acc):
-    """The stages' accelerations acc (4, P, 3), as rk4.py takes them."""
+def evaluate_stages(runs, table, loose, particles, h, start, work, cols, acc):
+    """The stages' accelerations acc (4, P, 3) from ``start`` (x, v), as rk4.py takes them."""
+    x, v = start
     xs, vs, fs = work[0:4], work[4:8], work[8:12]
     xs[0][:] = x
     vs[0][:] = v
@@ -221,8 +241,8 @@ def evaluate_stages(runs, table, loose, particles, h, x, v, work, cols, acc):
 
 
 @inline_kernel
-def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v_bar, bars,
-               work, cols):
+def stages_vjp(runs, table, loose, loose_bars, particles, h, start, acc, start_bar, bars, work,
+               cols):
     """The stages backwards (physics.accelerations_vjp at each): stage k's slope (v_k, a_k)
     enters y' with ``weight``, and its state is y + step (v_{k-1}, a_{k-1}), so what reaches
     (x_k, v_k) is carried to stage k-1. Each stage's state is written straight into the
@@ -230,11 +250,10 @@ def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v
     terms (their mass, drag and gravity), and one pass after the springs adds what they gave
     and carries it on. ``acc``: the stages' accelerations w (force - drag v) + gravity, whose
     derivative with respect to the mass is -w (acc - gravity)."""
-    a, b, ks, kd, rest = loose
-    inv_mass, drag, gravity = particles
-    _, _, _, mass_bar, drag_bar, gravity_bar = bars
-    loose_ks_bar, loose_kd_bar, loose_rest_bar = loose_bars
-    has_loose = a.shape[0] > 0
+    (x, v), (x_bar, v_bar) = start, start_bar
+    inv_mass, drag, gravity = particles.inv_mass, particles.drag, particles.gravity
+    mass_bar, drag_bar, gravity_bar = bars.mass, bars.drag, bars.gravity
+    has_loose = loose.a.shape[0] > 0
     xk, vk, gk, xk_bar, vk_bar = work[0], work[1], work[2], work[3], work[4]
     v_carry, a_carry, out_x, out_v = work[5], work[6], work[7], work[8]
     out_x[:] = x_bar
@@ -273,8 +292,7 @@ def stages_vjp(runs, table, loose, loose_bars, particles, h, x, v, acc, x_bar, v
             first, offset, count, start = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3]
             add_run_vjp(cols, table, first, first + offset, count, start)
         if has_loose:
-            add_spring_forces_vjp(a, b, ks, kd, rest, xk, vk, gk, xk_bar, vk_bar, loose_ks_bar,
-                                  loose_kd_bar, loose_rest_bar)
+            add_spring_forces_vjp(loose, xk, vk, gk, xk_bar, vk_bar, loose_bars)
         for i in range(x.shape[0]):
             for c in range(3):
                 x_share = xk_bar[i, c] + cols[X_BAR + c, i]

@@ -5,7 +5,7 @@ A step without contact solves with the forward's own matrix and CG (``ForwardSol
 pinned particles' rows filtered out as in the forward, A = M + h c - h dF/dv - h^2 dF/dx
 (clamped), the forward's tolerance. The adjoint is the derivative of the linearized step,
 treating the forward's solves as exact: the CG residuals are the gradient's error, of the
-tolerance's order. A step with terrain contact (implicit_contact.py) assembles A as a sparse
+tolerance's order. A step with terrain contact (implicit_replay.py) assembles A as a sparse
 matrix (``system_matrix``) and solves its reduced systems directly (``solve_reduced``: sparse LU
 up to DIRECT_LIMIT unknowns, CG to ADJOINT_TOLERANCE beyond).
 """
@@ -69,15 +69,14 @@ class ForwardSolver:
     def solve(self, rhs, contacts=None):
         """u with A u = rhs on the free particles (zero on the pinned ones); A with the active
         penalty ``contacts`` (contact_sets.SolveContacts) if given."""
-        from ..implicit.cg import contact_cg
+        from ..implicit.cg import CGWork, FilteredSystem, contact_cg
 
         u = np.zeros_like(rhs)
-        r, s, c, q = self.work
         contacts = self.contacts if contacts is None else contacts
-        done, _ = contact_cg(self.layout.diagonal, self.blocks, self.terms, contacts,
-                             self.layout.coarse, np.ascontiguousarray(rhs), self.kind,
-                             self.normal, u, self.tolerance, self.max_iterations, 0.0, r, s, c,
-                             q)
+        system = FilteredSystem(self.layout.diagonal, self.blocks, self.terms, contacts,
+                                self.layout.coarse, self.kind, self.normal)
+        done, _ = contact_cg(system, np.ascontiguousarray(rhs), u, self.tolerance,
+                             self.max_iterations, 0.0, CGWork(*self.work))
         self.iterations += done
         return u
 

@@ -55,8 +55,9 @@ def plan_stride(steps: int, particles: int, memory_limit: int, stages: int = 0) 
 
 
 def keeps_memory(simulation) -> bool:
-    """Whether the adjoint needs each step's contact memory: backward Euler's terrain contacts
-    carry their friction dampers from step to step (implicit_contact.py)."""
+    """Whether the adjoint needs each step's contact memory and record: backward Euler's terrain
+    contacts carry their friction dampers from step to step, and the replay reads the step's
+    decisions (implicit_replay.py)."""
     return simulation.integrator.name == "implicit_euler" and bool(simulation.model.terrains)
 
 

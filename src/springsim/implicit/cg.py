@@ -35,6 +35,7 @@ conserves momentum to rounding. With pins or terrain contacts momentum is not co
 and the solve is left as it is.
 """
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -53,6 +54,30 @@ MIN_REFERENCE = 1e-150
 # (coarse.py) and goes on two-level: a solve that converges sooner never pays for building it,
 # which costs about what ten iterations do (benchmarks/preconditioner.py)
 TWO_LEVEL_AFTER = 25
+
+
+class FilteredSystem(NamedTuple):
+    """A u = b as the solves take it: the stored blocks (``pattern``, ``blocks``), the springs'
+    ``terms`` (spring_terms.py), the active penalty ``contacts`` (penalty.py), the ``coarse``
+    space (coarse.py), and the constraints' filter S: each particle's ``kind`` and ``normal``
+    (constraints.py)."""
+
+    pattern: tuple
+    blocks: np.ndarray
+    terms: tuple
+    contacts: tuple
+    coarse: tuple
+    kind: np.ndarray
+    normal: np.ndarray
+
+
+class CGWork(NamedTuple):
+    """The work arrays of a solve, each shaped like u."""
+
+    r: np.ndarray   # the filtered residual S (b - A u)
+    s: np.ndarray   # the preconditioned residual
+    c: np.ndarray   # the search direction
+    q: np.ndarray   # its product S A c
 
 
 @kernel
@@ -102,27 +127,29 @@ def precondition(inverse, r, out):
 
 
 @kernel
-def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, reference_norm,
-                r, s, c, q):
+def filtered_cg(pattern, blocks, b, kind, normal, u, tolerance, max_iterations, work):
     """``contact_cg`` for the assembled matrix alone (no ball-particle contacts, no coarse
-    space)."""
-    return contact_cg(pattern, blocks, no_spring_terms(), no_contacts(),
-                      no_coarse_space(u.shape[0]), b, kind, normal, u, tolerance,
-                      max_iterations, reference_norm, r, s, c, q)
+    space), its reference the larger of the starting residual and |b|."""
+    system = FilteredSystem(pattern, blocks, no_spring_terms(), no_contacts(),
+                            no_coarse_space(u.shape[0]), kind, normal)
+    return contact_cg(system, b, u, tolerance, max_iterations, 0.0, work)
 
 
 @kernel
-def contact_cg(pattern, blocks, terms, contacts, coarse, b, kind, normal, u, tolerance,
-               max_iterations, reference_norm, r, s, c, q):
+def contact_cg(system, b, u, tolerance, max_iterations, reference_norm, work):
     """Improve ``u`` until |S (b - A u)| <= tolerance * reference (or max_iterations pass), A the
-    stored blocks plus the springs' ``terms`` (spring_terms.py) and the active ``contacts``
-    (penalty.py), preconditioned by block Jacobi, and after TWO_LEVEL_AFTER iterations also
-    by the ``coarse`` space (coarse.py) if it has aggregates.
+    ``system``'s (a FilteredSystem: the stored blocks plus the springs' terms and the active
+    contacts), preconditioned by block Jacobi, and after TWO_LEVEL_AFTER iterations also by
+    the system's coarse space if it has aggregates.
 
     The reference is ``reference_norm`` if positive, else the larger of the starting residual
-    |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. r, s, c, q are work arrays
-    shaped like u. Returns (iterations, reference norm used).
+    |S (b - A u)| and |b| (module doc), and at least MIN_REFERENCE. ``work``: a CGWork.
+    Returns (iterations, reference norm used).
     """
+    pattern, blocks, terms, contacts, coarse = (system.pattern, system.blocks, system.terms,
+                                                system.contacts, system.coarse)
+    kind, normal = system.kind, system.normal
+    r, s, c, q = work.r, work.s, work.c, work.q
     inverse = inverse_diagonal_blocks(pattern, blocks, contacts, u.shape[0])
     system_multiply(pattern, blocks, terms, contacts, u, q)
     for i in range(u.shape[0]):
@@ -203,11 +230,11 @@ def search_product(pattern, blocks, terms, contacts, kind, normal, s, beta, c, q
 
 
 @kernel
-def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, guess, u, r, s,
-               q):
+def mass_start(system, b, inverse_mass, guess, u, work):
     """u += alpha_1 S guess, then u += alpha_2 S M^-1 r, r = S (b - A u), each alpha the one
     that lowers the error's A-norm most along its direction (none if the direction has no
-    curvature). An all-zero guess is skipped. r, s, q are work arrays.
+    curvature), A and S the ``system``'s (a FilteredSystem). An all-zero guess is skipped.
+    ``work``: a CGWork (its r, s and q).
 
     Why M^-1 r: the block-Jacobi preconditioner divides by the springs' stiffness too, so a
     smooth load (gravity on a falling body: every particle's velocity changes by h g) takes
@@ -219,6 +246,9 @@ def mass_start(pattern, blocks, terms, contacts, b, kind, normal, inverse_mass, 
     the velocities alike. Taken as a direction with its best length, not as the start itself, it
     is never worse than none: a resting cube's last change is round-off, which as a start cost
     3.6 more iterations a step."""
+    pattern, blocks, terms, contacts = system.pattern, system.blocks, system.terms, system.contacts
+    kind, normal = system.kind, system.normal
+    r, s, q = work.r, work.s, work.q
     system_multiply(pattern, blocks, terms, contacts, u, q)
     for i in range(u.shape[0]):
         for k in range(3):

@@ -247,8 +247,7 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, surface, v, dv,
 
 
 @kernel
-def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, normal, surface,
-                                v, dv, ddv, damping):
+def remembered_friction_in_cone(model, pattern, blocks, rhs, i, slots, v, dv, ddv, damping):
     """(the friction damper c that contact i carries over from the last step, whether it was
     lowered): lowered where it would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
     the step starts from. Without this a contact that friction held at rest (c = Coulomb /
@@ -270,6 +269,7 @@ def remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind, terrain, n
     each step slipping by the support's acceleration times h (it moved on along a straight
     line while the surface turned under it); c |u_t| alone would read that as a kick, lower c
     at every step and need a second solve to restore it."""
+    kind, terrain, normal, surface = slots.kind, slots.terrain, slots.normal, slots.surface
     if kind[i] != CONTACT or damping == 0.0:
         return damping, False
     nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]

@@ -45,7 +45,8 @@ from ..collision.response.solve_friction import apply_contact_friction
 from ..errors import SceneError, require
 from ..forces import spring_forces
 from ..implicit.coarse import no_coarse_space
-from ..implicit.cg import conserve_momentum, contact_cg, mass_start, system_multiply
+from ..implicit.cg import (CGWork, FilteredSystem, conserve_momentum, contact_cg, mass_start,
+                           system_multiply)
 from ..implicit.constraints import (CAPPED, UNCHANGED, find_constraints,
                                     hold_all_constrained, hold_constrained,
                                     remembered_friction_in_cone, restore_impact_speeds,
@@ -149,19 +150,18 @@ def assemble_system(model, layout, state, work, contacts, h, first):
     # counts a reference up and down at every particle (six arrays: CHANGELOG, issue 56)
     blocks, rhs, normal, surface, dv, ddv = (work.blocks, work.rhs, work.normal, work.surface,
                                              work.dv, work.ddv)
-    kind, terrain, floor, friction = (memory.kind, memory.terrain, memory.normal_floor,
-                                      memory.friction_damping)
+    kind, floor, friction = memory.kind, memory.normal_floor, memory.friction_damping
     case = work.case
+    slots = contact_slots(state, work)
     ddv[:] = 0.0
     for i in range(x.shape[0]):
         hold_constrained(i, kind, normal, floor, v, dv, ddv)
         damping = friction[i]   # the fresh matrix has none yet
         friction[i] = 0.0
         case[i] = UNCHANGED
-        if first:   # carried from the last step: back inside the friction cone
-            damping, capped = remembered_friction_in_cone(model, pattern, blocks, rhs, i, kind,
-                                                          terrain, normal, surface, v, dv, ddv,
-                                                          damping)
+        if first and damping != 0.0:   # carried from the last step: back inside the cone
+            damping, capped = remembered_friction_in_cone(model, pattern, blocks, rhs, i, slots,
+                                                          v, dv, ddv, damping)
             if capped:
                 case[i] = CAPPED
         if damping != 0.0:   # (a call that would change nothing still counts its arrays)
@@ -198,14 +198,14 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
     pattern, blocks, terms, rhs, dv, ddv = (scratch.layout.diagonal, work.blocks, work.terms,
                                            work.rhs, work.dv, work.ddv)
     kind, normal, normal_floor = memory.kind, work.normal, memory.normal_floor
-    r, s, c, q = work.r, work.s, work.c, work.q
+    q = work.q
     coarse = scratch.layout.coarse
+    system = FilteredSystem(pattern, blocks, terms, contacts, coarse, kind, normal)
+    cg_work = CGWork(work.r, work.s, work.c, q)
     guess = memory.velocity_change if first else np.zeros((0, 3))
-    mass_start(pattern, blocks, terms, contacts, rhs, kind, normal, model.inv_mass, guess, ddv, r,
-               s, q)
-    iterations, reference = contact_cg(pattern, blocks, terms, contacts, coarse, rhs, kind,
-                                       normal, ddv, settings.tolerance, settings.max_iterations,
-                                       0.0, r, s, c, q)
+    mass_start(system, rhs, model.inv_mass, guess, ddv, cg_work)
+    iterations, reference = contact_cg(system, rhs, ddv, settings.tolerance,
+                                       settings.max_iterations, 0.0, cg_work)
     conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
     hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
     solves = 1
@@ -221,9 +221,8 @@ def solve_with_contacts(model, scratch, state, contacts, h, first):
         contacts_changed = update_active_contacts(contacts, h, ddv, rhs) > 0
         if not (terrain_changed or contacts_changed):
             break
-        more, reference = contact_cg(pattern, blocks, terms, contacts, coarse, rhs, kind,
-                                     normal, ddv, settings.tolerance, settings.max_iterations,
-                                     reference, r, s, c, q)
+        more, reference = contact_cg(system, rhs, ddv, settings.tolerance,
+                                     settings.max_iterations, reference, cg_work)
         conserve_momentum(pattern, blocks, terms, contacts, rhs, kind, ddv, q)
         hold_all_constrained(kind, normal, normal_floor, v, dv, ddv)
         iterations += more
