@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SceneError, require
-from .adjoints import ADJOINTS
+from .adjoints import adjoint_class
 from .checks import check_supported, contact_check
 from .losses import as_loss
 from .parameters import parameter
@@ -94,7 +94,7 @@ def run_gradient(simulation, loss, duration: float, memory_limit=DEFAULT_MEMORY_
         raise SceneError("loss", value, "must be a finite number with a finite gradient "
                          "(the loss returned NaN or infinity)")
     physical = Physical.of(simulation.model)
-    adjoint = ADJOINTS[simulation.integrator.name](simulation.integrator, simulation.model)
+    adjoint = adjoint_class(simulation.integrator)(simulation.integrator, simulation.model)
     x0_bar, v0_bar, bar = backward(simulation, adjoint, physical, tape, frame_steps, frame_bars,
                                      contact_check(simulation, physical))
     # a pinned particle never moves: its initial velocity is zeroed by the model

@@ -1,8 +1,8 @@
 """The adjoint of each integrator's step: given the cotangents of the state after a step, the
 cotangents of the state before it, and the parameters' share added to ``bar``.
 
-An open set, as the integrators are: one class per method, registered under the integrator's
-name (``@register_adjoint``). Each mirrors its method's step (integrators/) line by line in
+An open set, as the integrators are: one class per method, which the method names beside its
+step (``Integrator.adjoint``: "module:Class"; ``adjoint_class`` reads it). Each mirrors its method's step (integrators/) line by line in
 reverse, so the gradient is of the arithmetic the simulation did, not of the differential
 equation it approximates. ``step_vjp(physical, h, start, end, x_bar, v_bar, bar, kept)`` takes
 the recorded states at the step's start and end, (x, v) each, and what the tape kept of the step
@@ -15,6 +15,7 @@ in NumPy from the step's start to know what it did; the hard attachments are hel
 that pass (attachments.py), and the body-body contacts answered after it (body_contact.py), the
 same way.
 """
+import importlib
 from typing import NamedTuple
 
 import numpy as np
@@ -38,15 +39,25 @@ from .clock import at_time
 from .pins import aim, place, release
 from .terms import any_acts
 
-ADJOINTS: dict[str, type] = {}
 # how far (relative to the fastest speed) an explicit step's NumPy replay may end from the
 # forward's kernels where body contacts acted: rounding, not another contact set
 REPLAYED = 1e-7
 
 
-def register_adjoint(cls):
-    ADJOINTS[cls.name] = cls
-    return cls
+def adjoint_class(integrator) -> type | None:
+    """The adjoint class that ``integrator`` (an Integrator) names beside its step (its
+    ``adjoint``: "module:Class"), or None where it names none."""
+    if not integrator.adjoint:
+        return None
+    module, name = integrator.adjoint.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def differentiable() -> list[str]:
+    """The integrators that name an adjoint."""
+    from ..integrators import base
+
+    return [name for name, cls in base.REGISTRY.items() if cls.adjoint]
 
 
 class Adjoint:
@@ -98,7 +109,6 @@ class ExplicitAdjoint(Adjoint):
         return x_bar, v_bar
 
 
-@register_adjoint
 class SymplecticEulerAdjoint(ExplicitAdjoint):
     """v' = v + h a(x, v), x' = x + h v'."""
 
@@ -119,7 +129,6 @@ class SymplecticEulerAdjoint(ExplicitAdjoint):
         return x_bar, v_bar
 
 
-@register_adjoint
 class ExplicitEulerAdjoint(ExplicitAdjoint):
     """x' = x + h v, v' = v + h a(x, v)."""
 
@@ -163,7 +172,6 @@ class Runs(NamedTuple):
                    Particles(physical.inv_mass, physical.drag, physical.gravity), plain)
 
 
-@register_adjoint
 class MidpointAdjoint(ExplicitAdjoint):
     """integrators/midpoint.py: (x_m, v_m) = (x, v) + h/2 (v, a(x, v)), then
     x' = x + h v_m, v' = v + h a(x_m, v_m), the second evaluation half way through the step."""
@@ -191,7 +199,6 @@ class MidpointAdjoint(ExplicitAdjoint):
         return out_x, out_v
 
 
-@register_adjoint
 class PredictReevaluateAdjoint(ExplicitAdjoint):
     """integrators/predict_reevaluate.py: (x_p, v_p) = (x, v) + h (v, a(x, v)), then
     x' = x + h v_p, v' = v + h a_p, a_p the forces' at (x_p, v_p) at the step's end with the
@@ -225,7 +232,6 @@ class PredictReevaluateAdjoint(ExplicitAdjoint):
         return out_x, out_v
 
 
-@register_adjoint
 class RK4Adjoint(ExplicitAdjoint):
     """integrators/rk4.py: stages (x_k, v_k), slopes (v_k, a(x_k, v_k)),
         x' = x + h/6 (v + 2 v2 + 2 v3 + v4),  v' = v + h/6 (a1 + 2 a2 + 2 a3 + a4),
@@ -323,7 +329,6 @@ class RK4Adjoint(ExplicitAdjoint):
         return out_x, out_v
 
 
-@register_adjoint
 class ImplicitEulerAdjoint(Adjoint):
     """integrators/implicit_euler.py without contact: Newton iterations k = 0 .. K-1 from
     dv_0 = 0, each solving A(x_k) ddv_k = r_k on the free particles,

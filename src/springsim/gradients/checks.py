@@ -18,14 +18,14 @@ run (``contact_check``).
 import numpy as np
 
 from ..errors import SceneError
-from .adjoints import ADJOINTS
+from .adjoints import adjoint_class, differentiable
 
 
 def check_supported(simulation) -> None:
     name = simulation.integrator.name
-    if name not in ADJOINTS:
+    if adjoint_class(simulation.integrator) is None:
         raise SceneError("integrator", name, "has no adjoint yet: gradients run under "
-                         + ", ".join(ADJOINTS))
+                         + ", ".join(differentiable()))
 
 
 def contact_check(simulation, physical=None):

@@ -249,8 +249,8 @@ def set_friction_damping(i, value, pattern, blocks, rhs, normal, surface, v, dv,
 @kernel
 def remembered_friction_in_cone(model, pattern, blocks, rhs, i, slots, v, dv, ddv, damping):
     """(the friction damper c that contact i carries over from the last step, whether it was
-    lowered): lowered where it would leave the friction cone: c |u_t| <= friction * lambda_n, u_t the tangential velocity
-    the step starts from. Without this a contact that friction held at rest (c = Coulomb /
+    lowered): lowered where it would leave the friction cone, c |u_t| <= friction * lambda_n,
+    u_t the tangential velocity the step starts from; ``slots`` the step's ContactSlots. Without this a contact that friction held at rest (c = Coulomb /
     SLIP_SPEED) and is then set sliding (a push, a kick, a velocity given between steps) starts
     the solve with a friction impulse c |u_t| millions of times Coulomb's: the first solve stops
     the body, tips it over its leading edge, and leaves a right-hand side so large that the

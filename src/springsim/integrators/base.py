@@ -28,6 +28,9 @@ class Integrator:
     name = ""
     order = 0
     summary = ""
+    # "module:Class" of the adjoint of its step (gradients/adjoints.py), read by
+    # springsim.gradient; empty: the method has no adjoint yet and gradients refuse it
+    adjoint = ""
     _kept_for = None   # the model whose things are kept (model_cache)
 
     def __init__(self, **options):

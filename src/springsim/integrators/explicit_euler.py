@@ -33,6 +33,7 @@ def parallel_advance(model, x, v, h, steps, pairs):
 @register
 class ExplicitEuler(KernelIntegrator):
     name = "explicit_euler"
+    adjoint = "springsim.gradients.adjoints:ExplicitEulerAdjoint"
     order = 1
     summary = "forward Euler: positions and velocities from the start-of-step state"
     kernel = staticmethod(advance)

@@ -332,6 +332,7 @@ class ImplicitEuler(Integrator):
     implicit/coarse.py; or ``"block_jacobi"`` alone)."""
 
     name = "implicit_euler"
+    adjoint = "springsim.gradients.adjoints:ImplicitEulerAdjoint"
     order = 1
     summary = "backward Euler, one linearized solve per step (Baraff-Witkin): large stable steps"
     SECTION = "implicit"   # the scene's table of its options

@@ -42,6 +42,7 @@ def parallel_advance(model, x, v, h, steps, pairs):
 @register
 class Midpoint(KernelIntegrator):
     name = "midpoint"
+    adjoint = "springsim.gradients.adjoints:MidpointAdjoint"
     order = 2
     summary = "explicit midpoint (RK2): derivative at a half-step state"
     kernel = staticmethod(advance)

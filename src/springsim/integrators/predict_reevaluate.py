@@ -66,6 +66,7 @@ def parallel_advance(model, x, v, h, steps, pairs):
 @register
 class PredictReevaluate(KernelIntegrator):
     name = "predict_reevaluate"
+    adjoint = "springsim.gradients.adjoints:PredictReevaluateAdjoint"
     order = 1
     summary = "the course framework's 'implicit' Euler: explicit predict, re-evaluate, step"
     kernel = staticmethod(advance)

@@ -142,6 +142,7 @@ def parallel_advance(model, x, v, h, steps, pairs):
 @register
 class RK4(KernelIntegrator):
     name = "rk4"
+    adjoint = "springsim.gradients.adjoints:RK4Adjoint"
     order = 4
     summary = "classical fourth-order Runge-Kutta"
     kernel = staticmethod(advance)

@@ -33,6 +33,7 @@ def parallel_advance(model, x, v, h, steps, pairs):
 @register
 class SymplecticEuler(KernelIntegrator):
     name = "symplectic_euler"
+    adjoint = "springsim.gradients.adjoints:SymplecticEulerAdjoint"
     order = 1
     summary = "semi-implicit Euler: new velocity first, then positions with it"
     kernel = staticmethod(advance)
