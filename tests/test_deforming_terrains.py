@@ -12,7 +12,8 @@ from springsim.errors import SceneError
 from springsim.export.mdd import encode as encode_mdd
 from springsim.export.pc2 import encode as encode_pc2
 from springsim.scenefile import load_scene
-from springsim.terrains.deforming_mesh import LAST_TIME, surface_at
+from springsim.terrains.deforming_mesh import LAST_TIME
+from springsim.terrains.deforming_surface import surface_at
 
 FPS = 24.0
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import springsim
-from springsim.terrains.deforming_mesh import surface_at
+from springsim.terrains.deforming_surface import surface_at
 
 
 pytestmark = pytest.mark.slow   # the built-in moving scenes run for seconds of simulated time

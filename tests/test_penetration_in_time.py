@@ -21,7 +21,7 @@ from springsim.scene import Scene
 from springsim.springs import SpringParameters
 from springsim.stability import deepest_penetration as depth_beyond_band
 from springsim.terrains import Plane, Sphere
-from springsim.terrains.deforming_mesh import surface_at
+from springsim.terrains.deforming_surface import surface_at
 
 SPEED = 2.0                 # m/s, the sphere's, along x
 TURN = math.pi / 2          # rad/s, the plane's, about z

@@ -18,7 +18,8 @@ from springsim.collision.broad_phase.surfaces import surface_pairs
 from springsim.scene import Scene
 from springsim.simulation import Simulation
 from springsim.collision.pair_lists.keeping import sheet_lies_unfolded, surface_skin
-from springsim.collision.pair_lists.unfolded_sheet import edges_meet, is_disk, no_sheet
+from springsim.collision.pair_lists.sheet_arrays import is_disk, no_sheet
+from springsim.collision.pair_lists.unfolded_sheet import edges_meet
 
 N = 20   # particles along each edge of the 2 m test cloth: spacing 0.105 m
 

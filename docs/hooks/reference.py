@@ -1,11 +1,12 @@
 """MkDocs hook: the pages that must not drift from the code, generated at every build.
 
-- ``guide/scene-reference.md``: every key a scene file accepts (``springsim.scenefile.scene_keys``,
-  which finds them as the scene-file reader does), its kind, default and what the validation
-  allows. The *allowed* column is not written by hand: each key is set, in a scene that is valid
-  otherwise, to a few probe values (a value of the wrong kind, negative, zero, large, a zero
-  vector), the scene is validated, and the one-line messages of the ``SceneError`` raised for that
-  key are the text. A new check in a ``validate`` method shows up here by itself.
+- ``guide/scene-reference.md``: every key a scene file accepts
+  (``springsim.scene_schema.scene_keys``, which finds them as the scene-file reader does), its
+  kind, default and what the validation allows. The *allowed* column is not written by hand: each
+  key is set, in a scene that is valid otherwise, to a few probe values (a value of the wrong kind,
+  negative, zero, large, a zero vector), the scene is validated, and the one-line messages of the
+  ``SceneError`` raised for that key are the text. A new check in a ``validate`` method shows up
+  here by itself.
 - ``guide/cli-reference.md``: every command and option, walked from ``springsim.cli.build_parser``.
 - ``gallery.md``: a picture and an animation of every built-in scene, from the list of scenes;
   the files are made by scripts/make_gallery.py, and one missing fails the strict build.

@@ -17,7 +17,7 @@ from .attachments import nearest_triangles
 from .bodies.pins import followed_terrain
 from .errors import require
 from .motion import Path
-from .terrains.deforming_mesh import DeformingSurface, surface_at
+from .terrains.deforming_surface import DeformingSurface, surface_at
 
 
 def check_rivets(pins, terrains, key: str) -> None:

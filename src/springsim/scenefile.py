@@ -30,26 +30,28 @@ its line in ``scene_values.BODY_TYPES`` (terrain kinds come from ``terrains.TERR
 Overrides address list items by index: ``bodies.0.particles_per_edge=7``,
 ``terrains.0.friction=0.5``, ``bodies.0.structural.ks=3000``, ``gravity.1=-1.62``. Values are TOML
 values (``1e-3``, ``true``, ``[0, -1.62, 0]``, ``{ks = 10, kd = 1}``); a bare word is a string.
+
+This module reads; the overrides (scene_overrides.py), the writer back to TOML (scene_toml.py)
+and the list of every key for the documentation (scene_schema.py) have modules of their own,
+whose public names it gives too.
 """
 import dataclasses
-import json
-import numbers
 import os
 import stat
 import tomllib
-import types
 import typing
 from pathlib import Path
-
-import numpy as np
 
 from .errors import SceneError, require
 from .file_kinds import is_recording_file
 from .presets import MESHES, PRESETS, preset
 from .scene import Scene
-from .scene_values import (BODY_TYPES, TYPED_LISTS, convert_field, convert_like,  # noqa: F401
-                           describe, init_fields, merge_table, typed_item, is_integer,
-                           is_table_list, join_key, strip_optional)
+# the parts of a scene file's life that have modules of their own, named here too: the
+# overrides, the writer and the list of keys
+from .scene_overrides import apply_override, parse_value, set_path  # noqa: F401
+from .scene_schema import SceneKey, scene_keys  # noqa: F401
+from .scene_toml import scene_to_toml, toml_value, type_name  # noqa: F401
+from .scene_values import BODY_TYPES, TYPED_LISTS, merge_table  # noqa: F401
 from .terrains import TERRAIN_TYPES  # noqa: F401  (the registries, as the readers name them)
 
 
@@ -251,279 +253,3 @@ def with_builtin_mesh_names(scene: Scene) -> Scene:
             elif str(path) in made:
                 item.file = BUILTIN_MESH + made[str(path)]
     return scene
-
-
-def apply_override(scene: Scene, override: str) -> Scene:
-    """A copy of ``scene`` with the ``"dotted.key=value"`` override applied."""
-    key, separator, raw = str(override).partition("=")
-    key = key.strip()
-    require(separator == "=" and key != "", "--set", override,
-            "must be KEY=VALUE, for example bodies.0.particles_per_edge=7")
-    return set_path(scene, key.split("."), parse_value(raw.strip()), "", key)
-
-
-def parse_value(text: str):
-    """A TOML value (number, boolean, string, array, inline table), else a number as Python
-    writes it (``.5``, which TOML refuses), else the bare text as a string."""
-    try:
-        return tomllib.loads(f"value = {text}")["value"]
-    except tomllib.TOMLDecodeError:
-        pass
-    for number in (int, float):
-        try:
-            return number(text)
-        except ValueError:
-            pass
-    return text
-
-
-# --- overrides: one value deep inside the scene ---------------------------------------------------
-
-def set_path(node, parts: list[str], value, prefix: str, full_key: str):
-    """A copy of ``node`` (a dataclass, list or tuple) with the value at ``parts`` replaced.
-
-    ``prefix`` is the key of ``node``; errors about the path name the whole ``full_key``.
-    """
-    head, rest = parts[0], parts[1:]
-    key = join_key(prefix, head)
-    if isinstance(node, (list, tuple)):
-        index = _list_index(node, head, prefix, full_key, value)
-        items = list(node)
-        if rest:
-            items[index] = _descend(items[index], rest, value, key, full_key)
-        elif prefix in TYPED_LISTS:
-            items[index] = typed_item(value, prefix, items[index], key)
-        else:
-            items[index] = convert_like(value, items[index], key)
-        return type(node)(items)
-    fields = init_fields(type(node))
-    require(head in fields, full_key, value,
-            f"unknown key; {describe(node, prefix)} takes " + ", ".join(fields))
-    current = getattr(node, head)
-    if rest and current is None:       # an unset table (``X | None``): set keys of a new one
-        table = _unset_table(typing.get_type_hints(type(node)).get(head, typing.Any))
-        current = table[0]() if table is not None and table[1] == "" else None
-    if rest:
-        new = _descend(current, rest, value, key, full_key)
-    else:
-        new = convert_field(type(node), fields[head], value, current, key)
-    return dataclasses.replace(node, **{head: new})
-
-
-def _descend(child, rest: list[str], value, key: str, full_key: str):
-    require(dataclasses.is_dataclass(child) or isinstance(child, (list, tuple)), full_key, value,
-            f"unknown key; {key} is a single value, set it whole: {key}=...")
-    return set_path(child, rest, value, key, full_key)
-
-
-def _list_index(items, text: str, list_key: str, full_key: str, value) -> int:
-    """The item ``text`` names in ``items``; the error names the whole override key."""
-    count = len(items)
-    if count == 0:
-        allowed = f"{list_key} is empty, so no index exists"
-    else:
-        indices = "0" if count == 1 else f"0 to {count - 1}"
-        allowed = f"{list_key} has {count} item{'s' * (count > 1)}, so the index must be {indices}"
-    require(text.isdigit() and int(text) < count, full_key, value, f"unknown key; {allowed}")
-    return int(text)
-
-
-# --- tables: TOML tables to dataclasses ---------------------------------------------------------
-
-
-# --- values: TOML values to what a field holds ----------------------------------------------------
-
-
-# --- scenes built in Python: the same checks as a scene file's values ----------------------------
-
-
-# --- writing a scene back out as TOML -----------------------------------------------------------
-
-def scene_to_toml(scene: Scene, only_changes: bool = False) -> str:
-    """The scene as a TOML scene file that ``load_scene`` reads back to the same scene.
-
-    ``only_changes`` leaves out every key that has its default value, but for the name and the
-    step: a file that gives no dt gets one chosen from its springs (step_size.py), so the step
-    the scene ran with is always written.
-    """
-    defaults = Scene() if only_changes else None
-    tables = [name for name in init_fields(Scene) if name not in TYPED_LISTS
-              and isinstance(getattr(scene, name), list)
-              and _unset_table(typing.get_type_hints(Scene).get(name)) is not None]
-    lines = [f"{name} = {toml_value(getattr(scene, name))}"
-             for name in init_fields(Scene) if name not in TYPED_LISTS and name not in tables
-             and getattr(scene, name) is not None   # unset (no wind): TOML has no null
-             and (name in ("name", "dt") or not _is_default(scene, defaults, name))]
-    for list_name, (_, registry) in TYPED_LISTS.items():
-        for item in getattr(scene, list_name):
-            kind = type_name(item, registry)
-            lines += ["", f"[[{list_name}]]", f"type = {toml_value(kind)}"]
-            lines += _table_lines(item, list_name, registry[kind]() if only_changes else None)
-    for list_name in tables:   # arrays of tables without a type: [[attachments]]
-        for item in getattr(scene, list_name):
-            lines += ["", f"[[{list_name}]]"]
-            lines += _table_lines(item, list_name,
-                                  _default_instance(type(item)) if only_changes else None)
-    return "\n".join(lines) + "\n"
-
-
-def _table_lines(node, prefix: str, defaults=None) -> list[str]:
-    """Plain keys first, then a ``[prefix.name]`` sub-table per dataclass field and a
-    ``[[prefix.name]]`` table per item of a list of dataclasses (TOML wants that order).
-    Keys equal to those of ``defaults`` (an instance, or None to keep every key) are left out."""
-    lines, tables = [], []
-    for name in init_fields(type(node)):
-        value, key = getattr(node, name), f"{prefix}.{name}"
-        if value is None or _is_default(node, defaults, name):
-            continue   # None: unset, which TOML (no null) says by leaving the key out
-        if dataclasses.is_dataclass(value):
-            inner = _table_lines(value, key, getattr(defaults, name, None))
-            tables += [f"[{key}]"] + inner
-        elif is_table_list(value):
-            for item in value:
-                item_defaults = _default_instance(type(item)) if defaults is not None else None
-                tables += [f"[[{key}]]"] + _table_lines(item, key, item_defaults)
-        else:
-            lines.append(f"{name} = {toml_value(value)}")
-    return lines + tables
-
-
-def _is_default(node, defaults, name: str) -> bool:
-    if defaults is None:
-        return False
-    value, default = getattr(node, name), getattr(defaults, name)
-    try:
-        return bool(value == default) and type(value) is type(default)
-    except ValueError:                      # arrays compare elementwise
-        return bool(np.array_equal(value, default))
-
-
-def _default_instance(cls):
-    """``cls()`` where every field has a default; None (keep every key) otherwise."""
-    try:
-        return cls()
-    except TypeError:
-        return None
-
-
-def toml_value(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "true" if value else "false"
-    if isinstance(value, numbers.Integral):
-        return str(int(value))
-    if isinstance(value, numbers.Real):
-        return repr(float(value))   # repr round-trips exactly and is valid TOML (1e-05, inf)
-    if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
-    if isinstance(value, np.ndarray):
-        return toml_value(value.tolist())
-    if dataclasses.is_dataclass(value):
-        value = {name: getattr(value, name) for name in init_fields(type(value))}
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{name} = {toml_value(item)}" for name, item in value.items()) + "}"
-    if isinstance(value, (tuple, list)):
-        return "[" + ", ".join(toml_value(item) for item in value) + "]"
-    raise SceneError("scene", value, "holds a value that a TOML file cannot say")
-
-
-def type_name(item, registry: dict) -> str:
-    """The registry name of a body or terrain (the first entry that is exactly its class)."""
-    for name, factory in registry.items():
-        if factory is type(item):
-            return name
-    raise SceneError("scene", type(item).__name__,
-                     "is not a registered type: " + ", ".join(registry))
-
-
-# --- small helpers ------------------------------------------------------------------------------
-
-
-# --- what a scene file accepts, for the documentation ---------------------------------------------
-
-@dataclasses.dataclass(frozen=True)
-class SceneKey:
-    """One key a scene file accepts. ``path`` is the key as ``--set`` takes it, with ``N`` where
-    a list index goes (``bodies.N.structural.ks``); ``owner`` is the body or terrain type it
-    belongs to (``"scene"`` for the top level); ``kind`` says what value it holds."""
-
-    owner: str
-    path: str
-    kind: str
-    default: object
-
-
-def scene_keys() -> list[SceneKey]:
-    """Every key the readers above accept, found the way they find them (a table's keys are its
-    dataclass's fields, ``TYPED_LISTS`` says which types a list holds), so that the generated
-    scene-file reference lists exactly what a scene file may say."""
-    keys = _table_keys(Scene(), "", "scene")
-    for list_name, (_, registry) in TYPED_LISTS.items():
-        for kind, factory in registry.items():
-            keys.append(SceneKey(kind, f"{list_name}.N.type", "string", kind))
-            keys += _table_keys(factory(), f"{list_name}.N", kind)
-    return keys
-
-
-def _table_keys(node, prefix: str, owner: str) -> list[SceneKey]:
-    hints = typing.get_type_hints(type(node))
-    keys = []
-    for name in init_fields(type(node)):
-        value, path = getattr(node, name), join_key(prefix, name)
-        if type(node) is Scene and name in TYPED_LISTS:
-            keys.append(SceneKey(owner, path, "array of tables, each with a type", []))
-            continue
-        annotation = hints.get(name, typing.Any)
-        keys.append(SceneKey(owner, path, _kind_text(annotation, value), value))
-        if dataclasses.is_dataclass(value):
-            keys += _table_keys(value, path, owner)
-        elif is_table_list(value):
-            keys += _table_keys(value[0], f"{path}.N", owner)
-        elif (table := _unset_table(annotation)) is not None:   # `X | None` or `list[X]`
-            keys += _table_keys(_with_required_unset(table[0]), path + table[1], owner)
-    return keys
-
-
-def _with_required_unset(table):
-    """An instance of a table's dataclass with its required keys (a keyframe's ``time``) None,
-    which the reference shows as having no default."""
-    required = {name: None for name, field in init_fields(table).items()
-                if field.default is dataclasses.MISSING
-                and field.default_factory is dataclasses.MISSING}
-    return table(**required)
-
-
-def _unset_table(annotation):
-    """(the dataclass, the key suffix) of a field that holds a table but is unset by default:
-    ``X | None`` (``""``) or ``list[X]`` (``".N"``), so that the reference lists its keys."""
-    annotation = strip_optional(annotation)
-    if dataclasses.is_dataclass(annotation):
-        return annotation, ""
-    arguments = typing.get_args(annotation)
-    if typing.get_origin(annotation) is list and arguments and dataclasses.is_dataclass(
-            arguments[0]):
-        return arguments[0], ".N"
-    return None
-
-
-def _kind_text(annotation, default) -> str:
-    """What ``convert`` takes for a field of this annotation and default, in words."""
-    annotation = strip_optional(annotation)
-    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
-        return " or ".join(_kind_text(kind, default) for kind in typing.get_args(annotation))
-    if dataclasses.is_dataclass(default) or dataclasses.is_dataclass(annotation):
-        return "table"
-    names = {bool: "boolean", int: "whole number", float: "number", str: "string"}
-    if annotation in names:
-        return names[annotation]
-    if annotation is np.ndarray:
-        return "array"
-    if annotation in (tuple, list) or typing.get_origin(annotation) in (tuple, list):
-        if is_table_list(default) or _unset_table(annotation) is not None:
-            return "array of tables"
-        if isinstance(default, (tuple, list)) and default and all(
-                isinstance(item, float) for item in default):
-            return f"array of {len(default)} numbers"
-        if isinstance(default, (tuple, list)) and all(is_integer(item) for item in default):
-            return "array of whole numbers"
-        return "array"
-    return "value"

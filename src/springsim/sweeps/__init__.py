@@ -16,6 +16,8 @@ more than one worker must do so under ``if __name__ == "__main__":``.
 import os
 import sys
 import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from ..errors import require
 from ..safe_files import atomic_output
@@ -29,54 +31,82 @@ from .table import DONE, ResultsTable, columns, parse_row, row_of
 SAVE_FORMATS = ("npz",)
 
 
-def sweep(scene, vary=None, *, duration: float | None = None, seeds: int | None = None,
-          workers: int | None = None, dask: str | None = None, out: str | None = None,
-          save: str | None = None, fps: float = 60.0, overrides=(), plot=(),
-          progress: bool = False, on_row=None) -> list[dict]:
+@dataclass(frozen=True)
+class SweepOptions:
+    """How a sweep runs, what it keeps and whom it tells: ``sweep``'s keyword arguments, which
+    are the command line's options (checked before anything runs: ``check``)."""
+
+    duration: float | None = None   # simulated s of each run (default: the scene's)
+    seeds: int | None = None        # runs of each combination, each with its seed's nudge
+    workers: int | None = None      # local processes (default: every core)
+    dask: str | None = None         # a Dask scheduler's address (default: DASK_SCHEDULER_ADDRESS)
+    out: str | None = None          # the folder of results.csv; runs already there are skipped
+    save: str | None = None         # "npz": each run's recording in OUT/runs/ too
+    fps: float = 60.0               # frames sampled per simulated second
+    overrides: tuple = ()           # "KEY=VALUE" texts applied to the scene first (--set)
+    plot: tuple = ()                # "KEY:RESULT[:PATH]": a chart of a result against a key
+    progress: bool = False          # a progress bar, and a line for the runs skipped
+    on_row: Callable[[dict], object] | None = None   # called with each row as its run ends
+
+    def check(self) -> None:
+        check_workers(self.workers)
+        require(self.save is None or self.save in SAVE_FORMATS, "--save", self.save,
+                "must be " + " or ".join(SAVE_FORMATS))
+        require(self.save is None or self.out is not None, "--save", self.save,
+                "needs --out, the folder to save to")
+
+
+def sweep(scene, vary=None, **options) -> list[dict]:
     """Run ``scene`` (a built-in name or a .toml file) for every combination of ``vary`` and
     return the table: a dict per run, in run order (the columns of OUT/results.csv).
 
     ``vary`` maps scene keys to lists of values or to "START:STOP:COUNT" (a list of
-    "KEY=..." texts as the command line gives them works too); ``overrides`` are ``--set``
-    texts applied first. ``workers`` local processes (default: every core), or the Dask
-    scheduler at ``dask`` (default: DASK_SCHEDULER_ADDRESS, if set). With ``out`` the table goes
-    to OUT/results.csv as runs finish, runs already there are skipped, ``save="npz"`` keeps each
-    run's recording in OUT/runs/. Each "KEY:RESULT" of ``plot`` charts a result against a
-    varied key as OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is
-    called as each run finishes.
+    "KEY=..." texts as the command line gives them works too). The keyword ``options`` are
+    SweepOptions' fields: ``overrides``, ``--set`` texts applied first; ``workers`` local
+    processes (default: every core), or the Dask scheduler at ``dask`` (default:
+    DASK_SCHEDULER_ADDRESS, if set). With ``out`` the table goes to OUT/results.csv as runs
+    finish, runs already there are skipped, ``save="npz"`` keeps each run's recording in
+    OUT/runs/. Each "KEY:RESULT" of ``plot`` charts a result against a varied key as
+    OUT/RESULT-vs-KEY.png ("KEY:RESULT:PATH": as PATH). ``on_row(row)`` is called as each run
+    finishes; ``duration``, ``seeds``, ``fps`` and ``progress`` are the command line's.
     """
+    options = SweepOptions(**options)   # an unknown keyword raises TypeError, naming it
     variations = variations_of(vary)
-    check_workers(workers)
-    require(save is None or save in SAVE_FORMATS, "--save", save,
-            "must be " + " or ".join(SAVE_FORMATS))
-    require(save is None or out is not None, "--save", save, "needs --out, the folder to save to")
-    settings = list(overrides)
-    if duration is not None:
-        settings.append(f"duration={toml_value(duration)}")
-    specs = build_grid(scene, variations, overrides=settings, seeds=seeds, fps=fps,
-                       save=save is not None)
+    options.check()
+    specs = grid_of(scene, variations, options)
     keys = [variation.key for variation in variations]
-    charts = [parse_plot(text, keys + (["seed"] if seeds else []), out) for text in plot]
-    check_scheduler(dask)   # before the output folder is made or written
-    table = ResultsTable(out, columns(keys, bool(seeds), save is not None)) if out else None
-    done = resume(table, specs, out) if table else {}
-    rows = dict(done)
-    pending = [spec for spec in specs if spec.index not in done]
-    if done and progress:
-        print(f"springsim sweep: {len(done)} of {len(specs)} runs are already in {table.path}; "
+    charts = [parse_plot(text, keys + (["seed"] if options.seeds else []), options.out)
+              for text in options.plot]
+    check_scheduler(options.dask)   # before the output folder is made or written
+    out = options.out
+    table = ResultsTable(out, columns(keys, bool(options.seeds), options.save is not None)) \
+        if out else None
+    rows = resume(table, specs, out) if table else {}
+    pending = [spec for spec in specs if spec.index not in rows]
+    if rows and options.progress:
+        print(f"springsim sweep: {len(rows)} of {len(specs)} runs are already in {table.path}; "
               f"skipped them, running {len(pending)}", file=sys.stderr, flush=True)
-    for spec, row in run_all(pending, workers, dask, out, progress):
+    for spec, row in run_all(pending, options.workers, options.dask, out, options.progress):
         rows[spec.index] = row
         if table:
             table.append(row)
-        if on_row is not None:
-            on_row(row)
+        if options.on_row is not None:
+            options.on_row(row)
     ordered = [rows[spec.index] for spec in specs]
     if table:
         table.write(ordered)
     for key, result, path in charts:
         plot_sweep(ordered, key, result, path)
     return ordered
+
+
+def grid_of(scene, variations, options: SweepOptions):
+    """The sweep's runs (grid.build_grid), with its ``duration`` as one more override."""
+    settings = list(options.overrides)
+    if options.duration is not None:
+        settings.append(f"duration={toml_value(options.duration)}")
+    return build_grid(scene, variations, overrides=settings, seeds=options.seeds,
+                      fps=options.fps, save=options.save is not None)
 
 
 def variations_of(vary) -> list[Variation]:
@@ -158,4 +188,5 @@ def check_folder(out: str) -> None:
         require(False, "--out", out, f"cannot be made or written ({error.strerror})")
 
 
-__all__ = ["sweep", "build_grid", "parse_variation", "Variation", "run_one", "plot_sweep"]
+__all__ = ["sweep", "SweepOptions", "build_grid", "parse_variation", "Variation", "run_one",
+           "plot_sweep"]

@@ -35,7 +35,8 @@ from ..meshfiles import (TriangleMesh, check_triangles, is_closed, placed, read_
                          read_mesh_file, validate_placement)
 from ..animation import Animation
 from .base import Contact, register
-from .deforming_mesh import DeformingMesh, DeformingSurface, deforming_surface, surface_at
+from .deforming_mesh import DeformingMesh
+from .deforming_surface import DeformingSurface, deforming_surface, surface_at
 from .display import TerrainMesh
 
 PROBES = 512   # a moving mesh's vertices whose travel bounds its surface's (substeps.py)

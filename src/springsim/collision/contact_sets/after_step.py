@@ -20,11 +20,9 @@ def touching_contacts(model, x, start, point_pairs, edge_pairs, balls):
     """The touching pairs as stencils (ImpulseContacts): surfaces first (point-triangle,
     edge-edge), then balls."""
     capacity = point_pairs.shape[0] + edge_pairs.shape[0] + balls.shape[0]
-    nodes = np.empty((capacity, 4), np.int64)
-    weights = np.empty((capacity, 4))
-    normal = np.empty((capacity, 3))
-    depth = np.empty(capacity)
-    params = np.empty((capacity, PARAMS))
+    found = ImpulseContacts(np.empty((capacity, 4), np.int64), np.empty((capacity, 4)),
+                            np.empty((capacity, 3)), np.empty(capacity),
+                            np.empty((capacity, PARAMS)))
     bodies = np.empty((1, 2), np.int64)   # the touching pair's bodies, from the tests
     corners = np.empty((3, 3))   # work space of closest_on_triangle
     triangles, edges = model.surface_triangles, model.surface_edges
@@ -35,23 +33,22 @@ def touching_contacts(model, x, start, point_pairs, edge_pairs, balls):
     ball_keys = (model.radius, model.ball_slot, model.ball_restitution,
                  model.particle_restitution, model.particle_friction, model.position_correction)
     count = 0
+    params = found.params
     for k in range(point_pairs.shape[0]):
         if point_triangle_contact(triangles, body, thickness, x, start, point_pairs[k, 0],
-                                  point_pairs[k, 1], count, nodes, weights, normal, depth,
-                                  bodies, corners):
+                                  point_pairs[k, 1], found, count, bodies, corners):
             surface_params(surface_keys, bodies[0, 0], bodies[0, 1], params[count])
             count += 1
     for k in range(edge_pairs.shape[0]):
         if edge_edge_contact(edges, body, thickness, x, start, edge_pairs[k, 0],
-                             edge_pairs[k, 1], count, nodes, weights, normal, depth, bodies):
+                             edge_pairs[k, 1], found, count, bodies):
             surface_params(surface_keys, bodies[0, 0], bodies[0, 1], params[count])
             count += 1
     for k in range(balls.shape[0]):
-        if ball_contact(ball_keys, x, balls[k, 0], balls[k, 1], count, nodes, weights, normal,
-                        depth, params):
+        if ball_contact(ball_keys, x, balls[k, 0], balls[k, 1], found, count):
             count += 1
-    return ImpulseContacts(nodes[:count], weights[:count], normal[:count], depth[:count],
-                           params[:count])
+    return ImpulseContacts(found.nodes[:count], found.weights[:count], found.normal[:count],
+                           found.depth[:count], params[:count])
 
 
 @inline_kernel

@@ -29,25 +29,20 @@ from .stencils import edge_edge_stencil, point_triangle_stencil
 
 
 @inline_kernel
-def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
-    """Fill contact ``row`` for ball a and particle (or ball) b if they overlap: the stencil
-    (1, -1) along n, the unit vector from b to a, depth r_a + r_b - |x_a - x_b|. ``keys``: the
-    model's radius, ball_slot and ball tables (touching_contacts)."""
+def ball_contact(keys, x, a, b, contacts, row):
+    """Fill row ``row`` of ``contacts`` for ball a and particle (or ball) b if they overlap: the
+    stencil (1, -1) along n, the unit vector from b to a, depth r_a + r_b - |x_a - x_b|.
+    ``keys``: the model's radius, ball_slot and ball tables (touching_contacts)."""
     radius, ball_slot, ball_restitution, particle_restitution, particle_friction, correction = keys
     dx, dy, dz = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1], x[a, 2] - x[b, 2]
     distance = math.sqrt(dx * dx + dy * dy + dz * dz)
     overlap = radius[a] + radius[b] - distance
     if not overlap > 0.0:
         return False
+    n = (0.0, 1.0, 0.0)   # concentric: any direction separates them; choose up
     if distance > 0.0:
-        normal[row, 0] = dx / distance
-        normal[row, 1] = dy / distance
-        normal[row, 2] = dz / distance
-    else:   # concentric: any direction separates them; choose up
-        normal[row, 0], normal[row, 1], normal[row, 2] = 0.0, 1.0, 0.0
-    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = a, b, b, b
-    weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -1.0, 0.0, 0.0
-    depth[row] = overlap
+        n = (dx / distance, dy / distance, dz / distance)
+    fill_row(contacts, row, (a, b, b, b), (1.0, -1.0, 0.0, 0.0), n, overlap)
     ball, other = ball_slot[a], ball_slot[b]
     # every key read whichever kind the pair is, and the kind chosen among numbers: reading an
     # array inside the branch kept its reference counting in the loop (several times slower)
@@ -58,6 +53,7 @@ def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
                                      correction[ball])
     if other >= 0:   # ball-ball: the means of both balls' keys, no friction
         restitution, friction, shared = mean_restitution, 0.0, mean_correction
+    params = contacts.params
     params[row, 0] = restitution
     params[row, 1] = params[row, 2] = friction
     params[row, 3] = shared
@@ -67,9 +63,10 @@ def ball_contact(keys, x, a, b, row, nodes, weights, normal, depth, params):
 
 
 @inline_kernel
-def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, nodes, weights,
-                           normal, depth, bodies, corners):
-    """Fill contact ``row`` for point p and triangle t if they touch (module doc)."""
+def point_triangle_contact(triangles, body, thickness, x, start, p, t, contacts, row, bodies,
+                           corners):
+    """Fill row ``row`` of ``contacts`` for point p and triangle t if they touch (module doc);
+    their bodies into ``bodies[0]``. ``corners``: (3, 3) work space."""
     a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
     rest = 0.5 * (thickness[body[p]] + thickness[body[a]])
     for i in range(3):   # most listed pairs are further apart: a cheap test first
@@ -98,19 +95,16 @@ def point_triangle_contact(triangles, body, thickness, x, start, p, t, row, node
         return False   # on an edge, no direction known: the faces beside it decide
     if not gap < rest:
         return False
-    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = p, a, b, c
-    weights[row, 0], weights[row, 1], weights[row, 2], weights[row, 3] = 1.0, -w0, -w1, -w2
-    normal[row, 0], normal[row, 1], normal[row, 2] = n0, n1, n2
-    depth[row] = rest - gap
+    fill_row(contacts, row, (p, a, b, c), (1.0, -w0, -w1, -w2), (n0, n1, n2), rest - gap)
     bodies[0, 0], bodies[0, 1] = body[p], body[a]
     return True
 
 
 @inline_kernel
-def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weights, normal, depth,
-                      bodies):
-    """Fill contact ``row`` for edges e and f if they touch between their ends (where an end is
-    closest, the point-triangle contacts of the faces beside it decide)."""
+def edge_edge_contact(edges, body, thickness, x, start, e, f, contacts, row, bodies):
+    """Fill row ``row`` of ``contacts`` for edges e and f if they touch between their ends
+    (where an end is closest, the point-triangle contacts of the faces beside it decide); their
+    bodies into ``bodies[0]``."""
     a, b, c, q = edges[e, 0], edges[e, 1], edges[f, 0], edges[f, 1]
     rest = 0.5 * (thickness[body[a]] + thickness[body[c]])
     for i in range(3):   # most listed pairs are further apart: a cheap test first
@@ -130,12 +124,21 @@ def edge_edge_contact(edges, body, thickness, x, start, e, f, row, nodes, weight
              + d2 * ((1.0 - s) * start[a, 2] + s * start[b, 2] - (1.0 - t) * start[c, 2]
                      - t * start[q, 2]))
     sign = 1.0 if along >= 0.0 else -1.0   # the edges passed each other during the step: back
-    nodes[row, 0], nodes[row, 1], nodes[row, 2], nodes[row, 3] = a, b, c, q
-    weights[row, 0], weights[row, 1] = 1.0 - s, s
-    weights[row, 2], weights[row, 3] = -(1.0 - t), -t
-    normal[row, 0] = sign * d0 / distance
-    normal[row, 1] = sign * d1 / distance
-    normal[row, 2] = sign * d2 / distance
-    depth[row] = rest - sign * distance
+    fill_row(contacts, row, (a, b, c, q), (1.0 - s, s, -(1.0 - t), -t),
+             (sign * d0 / distance, sign * d1 / distance, sign * d2 / distance),
+             rest - sign * distance)
     bodies[0, 0], bodies[0, 1] = body[a], body[c]
     return True
+
+
+@inline_kernel
+def fill_row(contacts, row, nodes, weights, normal, depth):
+    """Write one contact into row ``row`` of ``contacts`` (contact_sets.ImpulseContacts, at
+    its capacity: touching_contacts): its stencil's four particles and signed weights, its
+    unit normal and its depth. The narrow phase reads the value by its field names only, so it
+    need not import contact_sets (which imports it)."""
+    out_nodes, out_weights, out_normal = contacts.nodes, contacts.weights, contacts.normal
+    out_nodes[row, 0], out_nodes[row, 1], out_nodes[row, 2], out_nodes[row, 3] = nodes
+    out_weights[row, 0], out_weights[row, 1], out_weights[row, 2], out_weights[row, 3] = weights
+    out_normal[row, 0], out_normal[row, 1], out_normal[row, 2] = normal
+    contacts.depth[row] = depth

@@ -11,7 +11,7 @@ bodies without surfaces): then the contact pass costs nothing.
 """
 import numpy as np
 
-from ..pair_lists.unfolded_sheet import no_sheet, unfolded_sheet_arrays
+from ..pair_lists.sheet_arrays import no_sheet, unfolded_sheet_arrays
 from .settings import SurfaceContact
 
 
