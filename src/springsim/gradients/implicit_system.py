@@ -6,8 +6,7 @@ import numpy as np
 from scipy import sparse
 
 from ..implicit.constraints import CONTACT, FREE
-from .physics import geometry, stiffness_coefficients
-from .solve import solve_reduced
+from .solve import solve_reduced, spring_blocks
 from . import terms
 
 
@@ -24,13 +23,7 @@ def diagonal_blocks(physical, x_k, v_k, h):
     """Each particle's diagonal block of the springs' matrix A (P, 3, 3): the masses and drag,
     the terms' diagonal blocks and every spring's C = p l l^T + q I
     (physics.system_product)."""
-    springs = geometry(physical, x_k)
-    along_, across, _, _, _ = stiffness_coefficients(physical, springs)
-    real = springs.length > 0.0
-    p = (h * physical.kd + h * h * along_) * real
-    q = h * h * across * real
-    l = springs.unit
-    blocks = p[:, None, None] * l[:, :, None] * l[:, None, :] + q[:, None, None] * np.eye(3)
+    blocks = spring_blocks(physical, x_k, h)
     out = np.zeros((x_k.shape[0], 3, 3))
     np.add.at(out, physical.a, blocks)
     np.add.at(out, physical.b, blocks)

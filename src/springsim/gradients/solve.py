@@ -81,18 +81,24 @@ class ForwardSolver:
         return u
 
 
-def system_matrix(physical, x, v, h):
-    """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag,
-    every spring's block C = p l l^T + q I added to (a, a), (b, b) and subtracted from (a, b),
-    (b, a), and the terms' entries."""
-    count = x.shape[0]
+def spring_blocks(physical, x, h):
+    """Every spring's block of A at x (S, 3, 3): C = p l l^T + q I, p = h kd + h^2 (its stiffness
+    along), q = h^2 (its stiffness across); none for a spring of zero length."""
     springs = geometry(physical, x)
     along, across, _, _, _ = stiffness_coefficients(physical, springs)
     real = springs.length > 0.0
     p = (h * physical.kd + h * h * along) * real
     q = h * h * across * real
     l = springs.unit
-    blocks = p[:, None, None] * l[:, :, None] * l[:, None, :] + q[:, None, None] * np.eye(3)
+    return p[:, None, None] * l[:, :, None] * l[:, None, :] + q[:, None, None] * np.eye(3)
+
+
+def system_matrix(physical, x, v, h):
+    """A at the estimate (x, v) as a sparse (3P, 3P) matrix: the diagonal masses and drag,
+    every spring's block C = p l l^T + q I added to (a, a), (b, b) and subtracted from (a, b),
+    (b, a), and the terms' entries."""
+    count = x.shape[0]
+    blocks = spring_blocks(physical, x, h)
     a, b = physical.a, physical.b
     rows, cols, values = [], [], []
     for i, j, sign in ((a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)):

@@ -99,13 +99,22 @@ def note_start(record, slots):
 
 
 @kernel
+def taken_row(counts, which, room):
+    """The next row of what ``counts[which]`` counts, counted even beyond the ``room`` there
+    is (the caller grows the record and takes the step again); -1 where there is no room, or
+    no record."""
+    if counts.shape[0] == 0:
+        return -1
+    row = counts[which]
+    counts[which] += 1
+    return row if row < room else -1
+
+
+@kernel
 def note_pass(record, slots):
     """A pass's decisions (slots.case): a first iteration's cap, or an update's."""
-    if record.counts.shape[0] == 0:
-        return
-    row = record.counts[0]
-    record.counts[0] += 1
-    if row >= record.rows.shape[0]:
+    row = taken_row(record.counts, 0, record.rows.shape[0])
+    if row < 0:
         return
     for i in range(slots.case.shape[0]):
         record.rows[row, i] = slots.case[i]
@@ -116,11 +125,8 @@ def note_pass(record, slots):
 @kernel
 def note_try(record, updates, solves, again):
     """A Newton iteration's shape: its update passes, its solves, whether it goes again."""
-    if record.counts.shape[0] == 0:
-        return
-    row = record.counts[1]
-    record.counts[1] += 1
-    if row >= record.tries.shape[0]:
+    row = taken_row(record.counts, 1, record.tries.shape[0])
+    if row < 0:
         return
     record.tries[row, 0], record.tries[row, 1] = updates, solves
     record.tries[row, 2] = 1 if again else 0
