@@ -178,6 +178,35 @@ def test_threads_change_no_bit():
     assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[1], runs[2])
 
 
+def test_the_graph_lists_each_particles_springs_in_sweep_order():
+    """vbd/graph.py: the free particles by colour, no spring within a colour, and the n-th one's
+    entries (start[n]:start[n + 1]) its springs, each with its other end, rest length, ks and
+    kd; pinned particles have none."""
+    from springsim.vbd.graph import vertex_graph
+
+    sim = Simulation(load_scene("cloth-hang"), integrator="vbd", dt=H)
+    arrays = sim.model.arrays
+    graph = vertex_graph(arrays)
+    springs = arrays.springs.astype(np.int64)
+    colour = np.full(len(arrays.inv_mass), -1)
+    for c in range(len(graph.colour_start) - 1):
+        colour[graph.particles[graph.colour_start[c]:graph.colour_start[c + 1]]] = c
+    assert np.array_equal(np.sort(graph.particles), np.flatnonzero(arrays.inv_mass > 0.0))
+    both_free = (colour[springs[:, 0]] >= 0) & (colour[springs[:, 1]] >= 0)
+    assert not (colour[springs[:, 0]] == colour[springs[:, 1]])[both_free].any()
+    assert graph.start[0] == 0 and graph.start[-1] == len(graph.other)
+    for n, i in enumerate(graph.particles):
+        entries = slice(graph.start[n], graph.start[n + 1])
+        mine = np.flatnonzero((springs == i).any(axis=1))
+        others = springs[mine].sum(axis=1) - i
+        expected = sorted(zip(others, arrays.rest_length[mine],
+                              arrays.group_ks[arrays.spring_group[mine]],
+                              arrays.group_kd[arrays.spring_group[mine]]))
+        listed = sorted(zip(graph.other[entries], graph.rest_length[entries],
+                            graph.ks[entries], graph.kd[entries]))
+        assert listed == expected
+
+
 @pytest.mark.parametrize("key, value, allowed", [
     ("iterations", 0, "whole number from 1 to 10000"),
     ("contact_stiffness_ratio", -1.0, "number > 0"),

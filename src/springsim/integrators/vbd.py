@@ -13,7 +13,8 @@ that loses energy, as backward Euler does.
 The first guess is VBD's adaptive one: x0 + h v0 + h^2 a, with a the last step's acceleration
 along gravity, kept to between zero and gravity itself (state.ContactMemory's velocity change).
 The terms (terms/) are linearized once an iteration, at its start: their force and their
-diagonal blocks of backward Euler's matrix, divided by h and h^2, join each particle's block.
+diagonal blocks of backward Euler's matrix, divided by h and h^2, join each particle's block (a
+model without terms skips this: TermLayout.terms).
 The particles of a colour share nothing they write, so they run on threads in the threaded
 kernel with the same bits as on one.
 
@@ -28,7 +29,7 @@ from numba import prange
 
 from .._jit import inline_kernel, kernel, parallel_kernel
 from ..errors import SceneError, require
-from ..terms import add_external_jacobians, add_step_end_forces
+from ..terms import TERMS, add_external_jacobians, add_step_end_forces
 from ..terrains import still_terrain_distance
 from ..vbd.contact import OFFSET_OF_BAND, contact_pressure, contact_share
 from ..vbd.graph import vertex_graph
@@ -58,6 +59,7 @@ class TermLayout(NamedTuple):
 
     diagonal: DiagonalSlots
     attachment_slots: np.ndarray   # (A, 4, 4) int64
+    terms: bool                    # whether the model uses any term (vbd_step skips them if not)
 
 
 def term_layout(arrays) -> TermLayout:
@@ -66,7 +68,8 @@ def term_layout(arrays) -> TermLayout:
     slots = np.full((len(nodes), 4, 4), count, np.int64)
     for j in range(4):
         slots[:, j, j] = nodes[:, j]
-    return TermLayout(DiagonalSlots(np.arange(count, dtype=np.int64)), slots)
+    used = any(term.used(arrays) for term in TERMS)
+    return TermLayout(DiagonalSlots(np.arange(count, dtype=np.int64)), slots, used)
 
 
 # --- the method ---------------------------------------------------------------------------------
@@ -75,17 +78,18 @@ def term_layout(arrays) -> TermLayout:
 def vbd_step(model, state, scratch, h, pairs):
     """One step: the world and the moving pins at the step's end, the first guess, the terrains
     near it, ``iterations`` sweeps colour by colour, then v = (x - x0) / h (module doc)."""
-    graph, settings, layout, x0, y, v_k, term_force, term_blocks, planes = scratch
+    graph, settings, layout, x0, y, v_k, term_force, term_blocks, planes, kd_over_h = scratch
     x, v, memory = state.x, state.v, state.memory
     move_world(model, step_end(model, h))
     aim_pins(model, x, v, h)
     start_guess(model, x, v, memory.velocity_change, h, x0, y)
     find_terrain_planes(model, x, planes)
     for _ in range(settings.iterations):
-        linearize_terms(model, layout, x, x0, h, v_k, term_force, term_blocks)
+        if layout.terms:   # else term_force and term_blocks stay zero (vbd_scratch)
+            linearize_terms(model, layout, x, x0, h, v_k, term_force, term_blocks)
         for colour in range(graph.colour_start.shape[0] - 1):
             sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes,
-                  memory, h)
+                  memory, h, kd_over_h)
     end_velocities(model, planes, x, x0, v, memory.velocity_change, h)
     keep_friction(model, settings, x, planes, memory, h)
     return pairs
@@ -118,8 +122,8 @@ def find_terrain_planes(model, x, planes):
     touching it at the particle's first guess, and its surface's velocity w there: contact is
     found once a step (as VBD finds it), and the sweeps read these planes, not the terrains. A
     lookup on a deforming mesh near its surface costs about 5 microseconds, which every block
-    step of every iteration cannot pay (the cape: 321 ms a step, against 122 with the planes). c = inf: out of the terrain's reach (a deforming mesh
-    answers infinity beyond it)."""
+    step of every iteration cannot pay (the cape: 321 ms a step, against 122 with the planes).
+    c = inf: out of the terrain's reach (a deforming mesh answers infinity beyond it)."""
     inv_mass, offset = model.inv_mass, model.terrain_offset
     band = model.terrain_epsilon
     kind, parameters, data = model.terrain_kind, model.terrain_parameters, model.terrain_data
@@ -161,14 +165,16 @@ def linearize_terms(model, layout, x, x0, h, v_k, force, blocks):
 
 
 @inline_kernel
-def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes, memory, h):
+def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes, memory, h,
+          kd_over_h):
     """One block step for each particle of ``colour`` (vbd/vertex.py), in parallel: they share
     no spring. The terrains are the step's planes (find_terrain_planes); friction is lagged from
-    the last step (``memory``: vbd/contact.py). The model's arrays are read as locals, which a
-    threaded loop can take."""
+    the last step (``memory``: vbd/contact.py); kd_over_h: each graph entry's kd / h
+    (vbd_scratch). The model's arrays are read as locals, which a threaded loop can
+    take, and arrays are indexed element by element, never sliced: a slice in the loop counts a
+    reference to its array up and down for each particle."""
     inv_mass, drag, band = model.inv_mass, model.drag, model.terrain_epsilon
-    start, other, rest_length, ks, kd = (graph.start, graph.other, graph.rest_length, graph.ks,
-                                        graph.kd)
+    start, other, rest_length, ks = graph.start, graph.other, graph.rest_length, graph.ks
     particles = graph.particles
     ratio, smoothing = settings.contact_stiffness_ratio, settings.friction_velocity * h
     rubbed, pressed = memory.terrain, memory.friction_damping
@@ -176,30 +182,34 @@ def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, pla
         i = particles[n]
         inertia = 1.0 / (inv_mass[i] * h * h)
         damping = drag[i] / h
-        m0, m1, m2 = x[i, 0] - x0[i, 0], x[i, 1] - x0[i, 1], x[i, 2] - x0[i, 2]
-        diagonal, s, b = inertia + damping, 1.0 / (h * h), term_blocks[i]
-        block = (-inertia * (x[i, 0] - y[i, 0]) - damping * m0 + term_force[i, 0] / h,
-                 -inertia * (x[i, 1] - y[i, 1]) - damping * m1 + term_force[i, 1] / h,
-                 -inertia * (x[i, 2] - y[i, 2]) - damping * m2 + term_force[i, 2] / h,
-                 diagonal + s * b[0, 0], s * b[0, 1], s * b[0, 2], diagonal + s * b[1, 1],
-                 s * b[1, 2], diagonal + s * b[2, 2])
-        for k in range(start[i], start[i + 1]):
-            block = added(block, spring_share(x, x0, i, other[k], rest_length[k], ks[k], kd[k],
-                                              h))
+        xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+        m0, m1, m2 = xi0 - x0[i, 0], xi1 - x0[i, 1], xi2 - x0[i, 2]
+        diagonal, s = inertia + damping, 1.0 / (h * h)
+        block = (-inertia * (xi0 - y[i, 0]) - damping * m0 + term_force[i, 0] / h,
+                 -inertia * (xi1 - y[i, 1]) - damping * m1 + term_force[i, 1] / h,
+                 -inertia * (xi2 - y[i, 2]) - damping * m2 + term_force[i, 2] / h,
+                 diagonal + s * term_blocks[i, 0, 0], s * term_blocks[i, 0, 1],
+                 s * term_blocks[i, 0, 2], diagonal + s * term_blocks[i, 1, 1],
+                 s * term_blocks[i, 1, 2], diagonal + s * term_blocks[i, 2, 2])
+        for k in range(start[n], start[n + 1]):   # the sweep's order (vbd/graph.py)
+            j = other[k]
+            block = added(block, spring_share(xi0, xi1, xi2, m0, m1, m2, x[j, 0], x[j, 1],
+                                              x[j, 2], x0[j, 0], x0[j, 1], x0[j, 2],
+                                              rest_length[k], ks[k], kd_over_h[k]))
         for t in range(band.shape[0]):
-            plane = planes[i, t]
-            phi = plane[0] * x[i, 0] + plane[1] * x[i, 1] + plane[2] * x[i, 2] + plane[3]
+            n0, n1, n2, offset = planes[i, t, 0], planes[i, t, 1], planes[i, t, 2], planes[i, t, 3]
+            phi = n0 * xi0 + n1 * xi1 + n2 * xi2 + offset
             delta = OFFSET_OF_BAND * band[t]
             rubbing = pressed[i] if rubbed[i] == t else 0.0
             if not (phi < delta or (rubbing > 0.0 and phi < np.inf)):   # far, or out of reach
                 continue
             block = added(block, contact_share(
-                phi, plane[0], plane[1], plane[2], ratio * inertia, delta, rubbing,
-                m0 - h * plane[4], m1 - h * plane[5], m2 - h * plane[6], smoothing))
+                phi, n0, n1, n2, ratio * inertia, delta, rubbing, m0 - h * planes[i, t, 4],
+                m1 - h * planes[i, t, 5], m2 - h * planes[i, t, 6], smoothing))
         d0, d1, d2 = solve_block(block)
-        x[i, 0] += d0
-        x[i, 1] += d1
-        x[i, 2] += d2
+        x[i, 0] = xi0 + d0
+        x[i, 1] = xi1 + d1
+        x[i, 2] = xi2 + d2
 
 
 @inline_kernel
@@ -279,12 +289,13 @@ def restored_impact(planes, band, resting, x, x0, v0, v):
 # --- the driver ---------------------------------------------------------------------------------
 
 @kernel
-def vbd_scratch(graph, settings, layout, x, terrain_count):
+def vbd_scratch(graph, settings, layout, x, terrain_count, h):
     """What vbd_step takes besides the state, as a plain tuple (a threaded kernel's array
-    analysis cannot take a NamedTuple apart: _steps.py)."""
+    analysis cannot take a NamedTuple apart: _steps.py): the work arrays, and each graph
+    entry's kd / h, which every block step reads (a division fewer a spring)."""
     return (graph, settings, layout, np.empty_like(x), np.empty_like(x), np.empty_like(x),
-            np.empty_like(x), np.zeros((x.shape[0] + 1, 3, 3)),
-            np.empty((x.shape[0], terrain_count, 7)))
+            np.zeros_like(x), np.zeros((x.shape[0] + 1, 3, 3)),
+            np.empty((x.shape[0], terrain_count, 7)), graph.kd / h)
 
 
 threaded_vbd_step = threaded(vbd_step)
@@ -294,14 +305,16 @@ threaded_vbd_step = threaded(vbd_step)
 def advance(model, graph, settings, layout, state, h, steps, pairs):
     """Take ``steps`` steps of ``state`` (an ImplicitState, changed in place); returns (steps
     done, first diverged particle or -1, the post-step pass's pair list: _steps.drive)."""
-    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0])
+    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0],
+                          h)
     return drive(vbd_step, model, state, scratch, h, steps, pairs)
 
 
 @parallel_kernel
 def parallel_advance(model, graph, settings, layout, state, h, steps, pairs):
     """advance, each colour's particles on threads."""
-    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0])
+    scratch = vbd_scratch(graph, settings, layout, state.x, model.terrain_epsilon.shape[0],
+                          h)
     return threaded_drive(threaded_vbd_step, model, state, scratch, h, steps, pairs)
 
 

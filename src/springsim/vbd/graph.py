@@ -6,9 +6,11 @@ colour's particles can be updated in any order, on any number of threads, with t
 the colouring fixes the result, and it is computed once per model (``vertex_graph``), greedily in
 particle order, so that the same model always gets the same colours.
 
-A particle's springs are laid out contiguously (``start[i]:start[i + 1]``), each entry with what
-the block needs of the spring (the other end, rest length, ks, kd) beside it, so that a sweep reads
-them in order instead of through the spring tables.
+A particle's springs are laid out contiguously, each entry with what the block needs of the
+spring (the other end, rest length, ks, kd) beside it, and the particles' entries one after
+another in the order a sweep visits the particles (by colour), so that a sweep reads them
+in one pass through memory instead of through the spring tables (a 100 x 100 cloth's entries
+are 4 MB, more than the caches hold).
 """
 from typing import NamedTuple
 
@@ -20,11 +22,11 @@ from .._jit import kernel
 class VertexGraph(NamedTuple):
     """The springs of each particle, and the particles by colour (module doc)."""
 
-    start: np.ndarray            # (P + 1,) int64: particle i's entries are start[i]:start[i + 1]
-    other: np.ndarray            # (2S,) int64: the spring's other end
-    rest_length: np.ndarray      # (2S,) m
-    ks: np.ndarray               # (2S,) N/m
-    kd: np.ndarray               # (2S,) N s/m
+    start: np.ndarray            # (F + 1,) int64: particles[n]'s entries are start[n]:start[n + 1]
+    other: np.ndarray            # (E,) int64: the spring's other end
+    rest_length: np.ndarray      # (E,) m
+    ks: np.ndarray               # (E,) N/m
+    kd: np.ndarray               # (E,) N s/m
     colour_start: np.ndarray     # (C + 1,) int64: colour c is particles[colour_start[c]:...[c + 1]]
     particles: np.ndarray        # (F,) int64: the free particles (inverse mass > 0), by colour
 
@@ -45,9 +47,15 @@ def vertex_graph(arrays) -> VertexGraph:
     free = np.flatnonzero(arrays.inv_mass > 0.0)
     by_colour = free[np.argsort(colour[free], kind="stable")]
     colour_start = np.searchsorted(colour[by_colour], np.arange(colour.max(initial=-1) + 2))
-    return VertexGraph(start, other, np.ascontiguousarray(arrays.rest_length[number]),
-                       np.ascontiguousarray(arrays.group_ks[group]),
-                       np.ascontiguousarray(arrays.group_kd[group]),
+    # the free particles' entries in sweep order (module doc)
+    counts = start[by_colour + 1] - start[by_colour]
+    entries = np.repeat(start[by_colour] - np.cumsum(counts) + counts, counts) + np.arange(
+        counts.sum())
+    return VertexGraph(np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+                       np.ascontiguousarray(other[entries]),
+                       np.ascontiguousarray(arrays.rest_length[number][entries]),
+                       np.ascontiguousarray(arrays.group_ks[group][entries]),
+                       np.ascontiguousarray(arrays.group_kd[group][entries]),
                        colour_start.astype(np.int64), by_colour.astype(np.int64))
 
 

@@ -21,25 +21,27 @@ x_i, with force f_i = -dE/dx_i and Hessian H_i. Each piece below adds its share 
 """
 import math
 
-from .._jit import inline_kernel, kernel
+from .._jit import kernel
 
 
-@inline_kernel
-def spring_share(x, x0, i, j, rest_length, ks, kd, h):
+@kernel
+def spring_share(xi0, xi1, xi2, mi0, mi1, mi2, xj0, xj1, xj2, oj0, oj1, oj2, rest_length, ks,
+                 kd_over_h):
     """A spring (i, j)'s share of particle i's block (module doc), as the 9-tuple ``Block``
-    holds: its force on i and the upper triangle of its Hessian. All zero for a spring of zero
-    length (no direction, no force, as in forces.py)."""
-    dx, dy, dz = x[i, 0] - x[j, 0], x[i, 1] - x[j, 1], x[i, 2] - x[j, 2]
+    holds: its force on i and the upper triangle of its Hessian. x_i, its motion this step
+    m_i = x_i - x0_i, x_j and x0_j are given by their coordinates (scalars: the sweep reads
+    particle i's once for all its springs); kd_over_h: kd / h, once a step. All zero for a
+    spring of zero length (no direction, no force, as in forces.py)."""
+    dx, dy, dz = xi0 - xj0, xi1 - xj1, xi2 - xj2
     length = math.sqrt(dx * dx + dy * dy + dz * dz)
     if length == 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     lx, ly, lz = dx / length, dy / length, dz / length
-    stretch = ((x[i, 0] - x0[i, 0] - x[j, 0] + x0[j, 0]) * lx
-               + (x[i, 1] - x0[i, 1] - x[j, 1] + x0[j, 1]) * ly
-               + (x[i, 2] - x0[i, 2] - x[j, 2] + x0[j, 2]) * lz)
-    size = ks * (length - rest_length) + kd / h * stretch
+    # (x_i - x0_i) - (x_j - x0_j) along l, summed in the order m_i - x_j + x0_j
+    stretch = (mi0 - xj0 + oj0) * lx + (mi1 - xj1 + oj1) * ly + (mi2 - xj2 + oj2) * lz
+    size = ks * (length - rest_length) + kd_over_h * stretch
     across = ks * max(0.0, 1.0 - rest_length / length)
-    along = ks - across + kd / h
+    along = ks - across + kd_over_h
     return (-size * lx, -size * ly, -size * lz, along * lx * lx + across, along * lx * ly,
             along * lx * lz, along * ly * ly + across, along * ly * lz, along * lz * lz + across)
 
