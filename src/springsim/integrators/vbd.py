@@ -88,8 +88,7 @@ def vbd_step(model, state, scratch, h, pairs):
         if layout.terms:   # else term_force and term_blocks stay zero (vbd_scratch)
             linearize_terms(model, layout, x, x0, h, v_k, term_force, term_blocks)
         for colour in range(graph.colour_start.shape[0] - 1):
-            sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes,
-                  memory, h, kd_over_h)
+            sweep(model, scratch, colour, x, memory, h)
     end_velocities(model, planes, x, x0, v, memory.velocity_change, h)
     keep_friction(model, settings, x, planes, memory, h)
     return pairs
@@ -165,14 +164,14 @@ def linearize_terms(model, layout, x, x0, h, v_k, force, blocks):
 
 
 @inline_kernel
-def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, planes, memory, h,
-          kd_over_h):
+def sweep(model, scratch, colour, x, memory, h):
     """One block step for each particle of ``colour`` (vbd/vertex.py), in parallel: they share
-    no spring. The terrains are the step's planes (find_terrain_planes); friction is lagged from
-    the last step (``memory``: vbd/contact.py); kd_over_h: each graph entry's kd / h
-    (vbd_scratch). The model's arrays are read as locals, which a threaded loop can
+    no spring. The terrains are the step's planes (find_terrain_planes, in ``scratch``:
+    vbd_scratch); friction is lagged from the last step (``memory``: vbd/contact.py);
+    kd_over_h: each graph entry's kd / h (vbd_scratch). The model's arrays are read as locals, which a threaded loop can
     take, and arrays are indexed element by element, never sliced: a slice in the loop counts a
     reference to its array up and down for each particle."""
+    graph, settings, _, x0, y, _, term_force, term_blocks, planes, kd_over_h = scratch
     inv_mass, drag, band = model.inv_mass, model.drag, model.terrain_epsilon
     start, other, rest_length, ks = graph.start, graph.other, graph.rest_length, graph.ks
     particles = graph.particles
@@ -193,9 +192,10 @@ def sweep(model, graph, settings, colour, x, x0, y, term_force, term_blocks, pla
                  s * term_blocks[i, 1, 2], diagonal + s * term_blocks[i, 2, 2])
         for k in range(start[n], start[n + 1]):   # the sweep's order (vbd/graph.py)
             j = other[k]
-            block = added(block, spring_share(xi0, xi1, xi2, m0, m1, m2, x[j, 0], x[j, 1],
-                                              x[j, 2], x0[j, 0], x0[j, 1], x0[j, 2],
-                                              rest_length[k], ks[k], kd_over_h[k]))
+            block = added(block, spring_share((xi0, xi1, xi2), (m0, m1, m2),
+                                              (x[j, 0], x[j, 1], x[j, 2]),
+                                              (x0[j, 0], x0[j, 1], x0[j, 2]), rest_length[k],
+                                              ks[k], kd_over_h[k]))
         for t in range(band.shape[0]):
             n0, n1, n2, offset = planes[i, t, 0], planes[i, t, 1], planes[i, t, 2], planes[i, t, 3]
             phi = n0 * xi0 + n1 * xi1 + n2 * xi2 + offset

@@ -25,13 +25,16 @@ from .._jit import kernel
 
 
 @kernel
-def spring_share(xi0, xi1, xi2, mi0, mi1, mi2, xj0, xj1, xj2, oj0, oj1, oj2, rest_length, ks,
-                 kd_over_h):
+def spring_share(xi, mi, xj, oj, rest_length, ks, kd_over_h):
     """A spring (i, j)'s share of particle i's block (module doc), as the 9-tuple ``Block``
     holds: its force on i and the upper triangle of its Hessian. x_i, its motion this step
-    m_i = x_i - x0_i, x_j and x0_j are given by their coordinates (scalars: the sweep reads
-    particle i's once for all its springs); kd_over_h: kd / h, once a step. All zero for a
-    spring of zero length (no direction, no force, as in forces.py)."""
+    m_i = x_i - x0_i, x_j and x0_j (``oj``) are given as tuples of their coordinates (scalars:
+    the sweep reads particle i's once for all its springs); kd_over_h: kd / h, once a step. All
+    zero for a spring of zero length (no direction, no force, as in forces.py)."""
+    xi0, xi1, xi2 = xi
+    mi0, mi1, mi2 = mi
+    xj0, xj1, xj2 = xj
+    oj0, oj1, oj2 = oj
     dx, dy, dz = xi0 - xj0, xi1 - xj1, xi2 - xj2
     length = math.sqrt(dx * dx + dy * dy + dz * dz)
     if length == 0.0:
