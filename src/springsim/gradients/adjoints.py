@@ -61,7 +61,7 @@ def differentiable() -> list[str]:
 
 
 class Adjoint:
-    name = ""
+    """The adjoint of one integrator's step (module doc), for the integrator and model given."""
 
     def __init__(self, integrator, model):
         self.integrator = integrator
@@ -112,8 +112,6 @@ class ExplicitAdjoint(Adjoint):
 class SymplecticEulerAdjoint(ExplicitAdjoint):
     """v' = v + h a(x, v), x' = x + h v'."""
 
-    name = "symplectic_euler"
-
     def update(self, physical, h, x, v):
         at_time(physical, 0.0)
         a, touches = step_accelerations(physical, x, v, h)
@@ -131,8 +129,6 @@ class SymplecticEulerAdjoint(ExplicitAdjoint):
 
 class ExplicitEulerAdjoint(ExplicitAdjoint):
     """x' = x + h v, v' = v + h a(x, v)."""
-
-    name = "explicit_euler"
 
     def update(self, physical, h, x, v):
         at_time(physical, 0.0)
@@ -176,8 +172,6 @@ class MidpointAdjoint(ExplicitAdjoint):
     """integrators/midpoint.py: (x_m, v_m) = (x, v) + h/2 (v, a(x, v)), then
     x' = x + h v_m, v' = v + h a(x_m, v_m), the second evaluation half way through the step."""
 
-    name = "midpoint"
-
     def update(self, physical, h, x, v):
         at_time(physical, 0.0)
         a, first = step_accelerations(physical, x, v, h)
@@ -203,8 +197,6 @@ class PredictReevaluateAdjoint(ExplicitAdjoint):
     """integrators/predict_reevaluate.py: (x_p, v_p) = (x, v) + h (v, a(x, v)), then
     x' = x + h v_p, v' = v + h a_p, a_p the forces' at (x_p, v_p) at the step's end with the
     terrains' contact stopping v, not v_p (that module says why)."""
-
-    name = "predict_reevaluate"
 
     def update(self, physical, h, x, v):
         at_time(physical, 0.0)
@@ -238,7 +230,6 @@ class RK4Adjoint(ExplicitAdjoint):
     with (x2, v2) = y + h/2 k1, (x3, v3) = y + h/2 k2, (x4, v4) = y + h k3. Every stage's
     contact is at the whole step h, as the forward's."""
 
-    name = "rk4"
     work = columns = None   # the kernel's work arrays, sized to the model
     runs = None   # Runs of the physical parameters last seen
     reach = None   # contact.Reach of the last step's start (the next one back's end)
@@ -339,7 +330,6 @@ class ImplicitEulerAdjoint(Adjoint):
     is the cotangent of r_k and -lambda ddv_k^T that of A_k. The last iteration's ddv is what
     the simulation computed (v' - v - dv_{K-1}); earlier ones are solved again here, tightly."""
 
-    name = "implicit_euler"
     carried_bar = None   # the cotangent of the friction dampers carried into the step after
     solver = None        # solve.ForwardSolver, made on first use
 
